@@ -1,0 +1,62 @@
+"""Stage 3 of the pipeline: the contact laws of MODEL.md sections 4 and 5, as sympy expressions.
+
+Each law is a function of the penetration `delta` and of named material parameters, so that
+the emitted C reads like the equations and one build serves a whole parameter sweep.
+"""
+from __future__ import annotations
+
+import sympy as sm
+
+# Parameters of the contact, named as in the model documentation.
+delta = sm.Symbol("delta")  # penetration, positive into the surface
+E_star = sm.Symbol("E_star", positive=True)  # reduced modulus (Eq. 7)
+R = sm.Symbol("R", positive=True)  # reduced tip radius (Eq. 8)
+delta_c = sm.Symbol("delta_c", positive=True)  # critical (yield) deformation
+P_c = sm.Symbol("P_c", positive=True)  # critical load
+C_j = sm.Symbol("C_j", positive=True)  # critical yield coefficient
+B = sm.Symbol("B", positive=True)  # Jackson-Green exponent B = 0.14 exp(23 S_y / E*)
+delta_r = sm.Symbol("delta_r", nonnegative=True)  # permanent deformation (set at max compression)
+R_res = sm.Symbol("R_res", positive=True)  # unloading radius (set at max compression)
+mu = sm.Symbol("mu", nonnegative=True)  # friction coefficient
+eps = sm.Symbol("eps", positive=True)  # regularization speed of the friction sign
+v_Bx = sm.Symbol("v_Bx")  # tangential tip velocity
+
+YIELD_ONSET = sm.Rational(19, 10)  # phase I ends at delta = 1.9 delta_c
+
+
+def hertz_force(d: sm.Expr = delta, radius: sm.Expr = R) -> sm.Expr:
+    """Phase I (Eq. 9): F = 4/3 E* R^(1/2) delta^(3/2)."""
+    return sm.Rational(4, 3) * E_star * sm.sqrt(radius) * d ** sm.Rational(3, 2)
+
+
+w = sm.Symbol("w", positive=True)  # delta / delta_c
+a = sm.Symbol("a", positive=True)  # contact radius
+H_over_S_y = sm.Symbol("H_over_S_y", positive=True)  # hardness over yield strength
+
+
+def jackson_green_steps(d: sm.Expr = delta) -> tuple[tuple[sm.Symbol, sm.Expr], ...]:
+    """Phase II (Eq. 10), the modified Jackson-Green law, as named steps ending in F."""
+    F = sm.Symbol("F")
+    return (
+        (w, d / delta_c),
+        (a, sm.sqrt(R * d * (d / (YIELD_ONSET * delta_c)) ** B)),
+        (H_over_S_y, sm.Float(2.84) - sm.Float(0.92) * (1 - sm.cos(sm.pi * a / R))),
+        (F, P_c * (sm.exp(-sm.Float(0.17) * w ** sm.Rational(5, 12)) * w ** sm.Rational(3, 2)
+                   + 4 * H_over_S_y / C_j * (1 - sm.exp(-w ** sm.Rational(5, 9) / 78))
+                   * w ** sm.Float(1.1))),
+    )
+
+
+def restitution_force(d: sm.Expr = delta) -> sm.Expr:
+    """Phase III (Eq. 11): elastic unloading about the permanent deformation delta_r."""
+    return hertz_force(d - delta_r, R_res)
+
+
+def friction_sign(v: sm.Expr = v_Bx) -> sm.Expr:
+    """The regularized sign of MODEL.md section 5: v / sqrt(v^2 + eps^2)."""
+    return v / sm.sqrt(v ** 2 + eps ** 2)
+
+
+def friction_force(normal_force: sm.Expr, v: sm.Expr = v_Bx) -> sm.Expr:
+    """Eq. 14 with the regularized sign: F_f = -mu |F| s(v_Bx), along x."""
+    return -mu * normal_force * friction_sign(v)

@@ -1,0 +1,231 @@
+"""Stage 5 of the pipeline: print the pruned expressions as C99 through Jinja2 templates.
+
+The emitted model.h / model.c are plain C99: no globals, no Python, no SUNDIALS. Every
+function takes the state and a `const` parameter struct, so the model can be compiled into
+any simulator. Common subexpressions are eliminated per block; sin(q_i) and cos(q_i) are
+computed once per call and named `sin_q1`, `cos_q1`, ... as in the equations.
+"""
+from __future__ import annotations
+
+import importlib.resources
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+
+import jinja2
+import sympy as sm
+from sympy.printing.c import C99CodePrinter
+
+from . import contact as law
+from .expressions import PHASES, ModelExpressions, ModelSpec, assemble_model
+
+PHASE_CODES = {name: code for code, name in enumerate(PHASES)}
+
+
+class ModelCPrinter(C99CodePrinter):
+    """C99 printer that writes the powers of contact mechanics without pow() where it can."""
+
+    def _print_Float(self, expr: sm.Float) -> str:  # shortest round-trip form: 0.92, not 0.920000...04
+        text = repr(float(expr))
+        return text if any(c in text for c in ".en") else text + ".0"
+
+    def _print_Pi(self, expr: sm.Expr) -> str:  # M_PI is not C99
+        return "3.14159265358979323846"
+
+    def _print_Pow(self, expr: sm.Pow) -> str:
+        base, exp = expr.base, expr.exp
+        b = self.parenthesize(base, sm.printing.precedence.PRECEDENCE["Mul"])
+        if exp == sm.Rational(1, 2):
+            return f"sqrt({self._print(base)})"
+        if exp == sm.Rational(3, 2):
+            return f"({b}*sqrt({self._print(base)}))"
+        if exp == -sm.Rational(1, 2):
+            return f"(1.0/sqrt({self._print(base)}))"
+        if exp.is_Integer and 2 <= int(exp) <= 4:
+            return "(" + "*".join([b] * int(exp)) + ")"
+        if exp == -1:
+            return f"(1.0/{b})"
+        if exp.is_Integer and -4 <= int(exp) <= -2:
+            return "(1.0/(" + "*".join([b] * -int(exp)) + "))"
+        return super()._print_Pow(expr)
+
+
+_printer = ModelCPrinter()
+
+
+def ccode(expr: sm.Expr) -> str:
+    return _printer.doprint(sm.sympify(expr))
+
+
+@dataclass(frozen=True)
+class CBlock:
+    """Straight-line C: temporaries from CSE, then named results."""
+
+    temps: tuple[tuple[str, str], ...]
+    results: tuple[tuple[str, str], ...]
+
+
+def c_block(named: list[tuple[str, sm.Expr]], tmp: str) -> CBlock:
+    """CSE over `named` expressions; temporaries are called tmp0, tmp1, ..."""
+    exprs = [sm.sympify(e) for _, e in named]
+    replacements, reduced = sm.cse(exprs, symbols=sm.numbered_symbols(tmp), optimizations="basic")
+    return CBlock(tuple((str(s), ccode(e)) for s, e in replacements),
+                  tuple((name, ccode(e)) for (name, _), e in zip(named, reduced)))
+
+
+def _trig_names(n: int) -> dict[sm.Expr, sm.Symbol]:
+    out: dict[sm.Expr, sm.Symbol] = {}
+    for i in range(1, n + 1):
+        q = sm.Symbol(f"q{i}")
+        out[sm.sin(q)] = sm.Symbol(f"sin_q{i}")
+        out[sm.cos(q)] = sm.Symbol(f"cos_q{i}")
+    return out
+
+
+@dataclass(frozen=True)
+class GeneratedModel:
+    """The emitted sources and what the runtime needs to know about them."""
+
+    spec: ModelSpec
+    prefix: str
+    header: str  # model.h
+    source: str  # model.c
+    cdef: str  # declarations for cffi
+    state_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+    event_names: tuple[str, ...]
+    param_names: tuple[str, ...]
+    phases: tuple[str, ...]
+
+
+def _templates() -> jinja2.Environment:
+    root = importlib.resources.files("impactgen.templates")
+    loader = jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8"))
+    return jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined,
+                              keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """One C function body: what it unpacks (states, parameters, sin/cos) and its blocks."""
+
+    q: tuple[tuple[int, str], ...]  # (index into y, name)
+    params: tuple[str, ...]
+    trig: tuple[tuple[str, str, str], ...]  # (name, "sin"|"cos", angle)
+    blocks: tuple[CBlock, ...]
+
+
+def _kernel(model: ModelExpressions, blocks: list[CBlock], extra_code: list[str] = ()) -> Kernel:
+    """Find what straight-line `blocks` (and hand-written `extra_code`) read, in order."""
+    n = model.spec.links
+    text = [c for b in blocks for _, c in b.temps + b.results] + list(extra_code)
+    trig = [(f"{fn}_q{i}", fn, f"q{i}") for i in range(1, n + 1) for fn in ("sin", "cos")
+            if any(_mentions(c, f"{fn}_q{i}") for c in text)]
+    text_with_trig = text + [a for _, _, a in trig]
+    states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
+    used_states = tuple((i, name) for i, name in states if any(_mentions(c, name) for c in text_with_trig))
+    params = tuple(name for name, _ in model.params if any(_mentions(c, name) for c in text))
+    return Kernel(used_states, params, tuple(trig), tuple(blocks))
+
+
+def _context(model: ModelExpressions, prefix: str) -> dict:
+    spec, chain = model.spec, model.chain
+    n = spec.links
+    trig = _trig_names(n)
+
+    def t(e: sm.Expr) -> sm.Expr:
+        return sm.sympify(e).xreplace(trig)
+
+    tip = {v.name: t(v.expr) for v in model.tip}
+
+    def tip_block(names: list[str]) -> CBlock:
+        return c_block([(k, tip[k]) for k in names], "tip")
+
+    # Right-hand side: tip kinematics, contact forces, Kane's equations M du/dt = f.
+    rhs_tip = tip_block(["delta", "v_Bx", "v_By"] if spec.has_friction else ["delta", "v_By"])
+    M = chain.mass_matrix
+    kane = c_block([(f"M[{i * n + j}]", t(M[i, j])) for i in range(n) for j in range(i + 1)]
+                   + [(f"f[{i}]", t(model.forcing[i])) for i in range(n)], "kin")
+    friction = c_block([("F_f", model.friction)], "fr") if model.friction is not None else None
+    rhs_blocks = [rhs_tip, kane] + ([friction] if friction else [])
+    works = [(f"ydot[{2 * n + k}]", ccode(w.expr), w.doc) for k, w in enumerate(model.works)]
+
+    # Events: only delta and its rate are needed.
+    ev_tip = tip_block(["delta", "delta_rate"])
+    events = [{"name": e.name.upper(), "doc": e.doc, "expr": ccode(e.expr)} for e in model.events]
+
+    # Outputs: every tip quantity, the forces, the energies.
+    out_tip = tip_block([v.name for v in model.tip])
+    tip_names = {v.name for v in model.tip} | {"F", "F_f"}
+    energies = c_block([(o.name, t(o.expr)) for o in model.outputs if o.name not in tip_names], "en")
+    out_blocks = [out_tip, energies] + ([friction] if friction else [])
+
+    force_cases = []
+    for case in model.force_cases:
+        block = CBlock((), tuple((str(name), ccode(e)) for name, e in case.steps))
+        active = ccode(case.active)
+        force_cases.append({"phase": case.phase.upper(), "doc": case.doc, "active": active,
+                            "kernel": _kernel(model, [block], [active])})
+
+    return {
+        "prefix": prefix,
+        "PREFIX": prefix.upper(),
+        "spec": spec,
+        "n": n,
+        "nstate": len(model.state_names),
+        "state_names": model.state_names,
+        "params": model.params,
+        "phases": [(p.upper(), PHASE_CODES[p]) for p in model.phases],
+        "events": events,
+        "outputs": [(o.name, o.doc) for o in model.outputs],
+        "rhs": _kernel(model, rhs_blocks),
+        "rhs_tip": rhs_tip,
+        "kane": kane,
+        "friction": friction,
+        "works": works,
+        "events_kernel": _kernel(model, [ev_tip], [e["expr"] for e in events]),
+        "ev_tip": ev_tip,
+        "outputs_kernel": _kernel(model, out_blocks),
+        "out_tip": out_tip,
+        "energies": energies,
+        "force_cases": force_cases,
+    }
+
+
+def _tidy(text: str) -> str:
+    """Strip trailing blanks and collapse runs of empty lines left by the templates."""
+    lines = [line.rstrip() for line in text.splitlines()]
+    out: list[str] = []
+    for line in lines:
+        if line or (out and out[-1]):
+            out.append(line)
+    return "\n".join(out).strip("\n") + "\n"
+
+
+def _mentions(code: str, name: str) -> bool:
+    return re.search(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])", code) is not None
+
+
+@lru_cache(maxsize=32)
+def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
+    """Emit model.h, model.c and the cffi declarations for `spec`."""
+    if not prefix.isidentifier() or not prefix.isascii():
+        raise ValueError(f"prefix {prefix!r} is not a C identifier")
+    model = assemble_model(spec)
+    ctx = _context(model, prefix)
+    env = _templates()
+    return GeneratedModel(
+        spec=spec,
+        prefix=prefix,
+        header=_tidy(env.get_template("model.h.j2").render(ctx)),
+        source=_tidy(env.get_template("model.c.j2").render(ctx)),
+        cdef=_tidy(env.get_template("cdef.h.j2").render(ctx)),
+        state_names=model.state_names,
+        output_names=tuple(o.name for o in model.outputs),
+        event_names=tuple(e.name for e in model.events),
+        param_names=tuple(name for name, _ in model.params),
+        phases=model.phases,
+    )
+
+
+__all__ = ["GeneratedModel", "generate_model", "ccode", "ModelCPrinter", "law"]

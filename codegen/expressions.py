@@ -1,0 +1,207 @@
+"""Stage 4 of the pipeline: assemble and prune the expressions one model needs.
+
+A `ModelSpec` is the *structure* a scene asks for (number of links, contact model,
+friction or not); numbers (lengths, masses, materials, mu) stay runtime parameters. From
+the spec, `assemble_model` picks the chain equations, the contact laws, the event
+functions and the outputs, leaving out whatever the scene cannot use: with friction off
+there is no friction symbol anywhere, with the Hertz model no elasto-plastic law.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+
+import sympy as sm
+
+from . import contact as law
+from .mechanics import ChainEquations, derive_chain
+
+# Phases of MODEL.md section 4, as the C enum values.
+PHASES = ("free", "elastic", "elastoplastic", "restitution")
+
+y_s = sm.Symbol("y_s")  # surface height
+delta_m = sm.Symbol("delta_m", nonnegative=True)  # maximum compression so far
+# Tip quantities, computed first in every C function and named as in the equations.
+TIP = {name: sm.Symbol(name) for name in ("x_B", "y_B", "v_Bx", "v_By", "delta", "delta_rate")}
+TIP["delta"] = law.delta
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What the generated C must be able to do; two scenes with equal specs share a build."""
+
+    links: int
+    contact_model: str = "three-phase"  # "three-phase" | "hertz"
+    friction: str = "regularized"  # "none" | "regularized"
+
+    def __post_init__(self) -> None:
+        if self.links < 1:
+            raise ValueError("links must be >= 1")
+        if self.contact_model not in ("three-phase", "hertz"):
+            raise ValueError(f"unknown contact model {self.contact_model!r}")
+        if self.friction not in ("none", "regularized"):
+            raise ValueError(f"unknown friction kind {self.friction!r}")
+
+    @property
+    def has_friction(self) -> bool:
+        return self.friction != "none"
+
+    @property
+    def plastic(self) -> bool:
+        return self.contact_model == "three-phase"
+
+    @property
+    def slug(self) -> str:
+        """A short readable name, e.g. 'chain2-three-phase-regularized'."""
+        return f"chain{self.links}-{self.contact_model}-{self.friction}"
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True)
+
+    def digest(self) -> str:
+        return hashlib.sha256(self.to_json().encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class ForceCase:
+    """The normal force in one phase: computed by `steps` (the last one is F) where
+    `active` holds, else 0."""
+
+    phase: str
+    active: sm.Expr  # a relational in delta
+    steps: tuple[tuple[sm.Symbol, sm.Expr], ...]
+    doc: str
+
+    @property
+    def expr(self) -> sm.Expr:
+        *steps, (_, force) = self.steps
+        for name, value in reversed(steps):
+            force = force.subs(name, value)
+        return force
+
+
+def _single(expr: sm.Expr) -> tuple[tuple[sm.Symbol, sm.Expr], ...]:
+    return ((sm.Symbol("F"), expr),)
+
+
+@dataclass(frozen=True)
+class Named:
+    name: str
+    expr: sm.Expr
+    doc: str
+
+
+@dataclass(frozen=True)
+class ModelExpressions:
+    """Everything the templates print, in sympy form, already pruned to the spec."""
+
+    spec: ModelSpec
+    chain: ChainEquations
+    forcing: sm.Matrix  # the chain's forcing, with F_f = 0 when friction is pruned
+    tip: tuple[Named, ...]  # x_B, y_B, v_Bx, v_By, delta, delta_rate
+    force_cases: tuple[ForceCase, ...]
+    friction: sm.Expr | None  # F_f in terms of F and v_Bx
+    events: tuple[Named, ...]
+    outputs: tuple[Named, ...]
+    works: tuple[Named, ...]  # power of each contact force: integrated as extra states
+    params: tuple[tuple[str, str], ...]  # (name, doc) of every runtime parameter
+
+    @property
+    def phases(self) -> tuple[str, ...]:
+        return PHASES if self.spec.plastic else tuple(p for p in PHASES if p != "elastoplastic")
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        s = self.chain.symbols
+        return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works)
+
+
+PARAM_DOCS = {
+    "g": "gravity, m/s^2",
+    "y_s": "surface height, m",
+    "E_star": "reduced modulus E*, Pa (Eq. 7)",
+    "R": "reduced tip radius, m (Eq. 8)",
+    "delta_c": "critical deformation, m",
+    "P_c": "critical load, N",
+    "C_j": "critical yield coefficient",
+    "B": "Jackson-Green exponent 0.14 exp(23 S_y/E*)",
+    "delta_m": "maximum compression of the current impact, m (set by the phase machine)",
+    "delta_r": "permanent deformation, m (set at maximum compression)",
+    "R_res": "unloading radius, m (set at maximum compression)",
+    "mu": "friction coefficient",
+    "eps": "regularization speed of the friction sign, m/s",
+}
+
+
+@lru_cache(maxsize=32)
+def assemble_model(spec: ModelSpec) -> ModelExpressions:
+    """Pick and prune the expressions `spec` needs."""
+    chain = derive_chain(spec.links)
+    s = chain.symbols
+    x_B, y_B = chain.tip_position
+    v_Bx, v_By = chain.tip_velocity
+    delta = law.delta
+    tip = (
+        Named("x_B", x_B, "tip position x, m"),
+        Named("y_B", y_B, "tip position y, m"),
+        Named("v_Bx", v_Bx, "tip velocity x, m/s"),
+        Named("v_By", v_By, "tip velocity y, m/s"),
+        Named("delta", y_s - y_B, "penetration, m"),
+        Named("delta_rate", -v_By, "d(delta)/dt, m/s"),
+    )
+
+    cases = [ForceCase("elastic", sm.StrictGreaterThan(delta, 0), _single(law.hertz_force()),
+                       "Hertz elastic compression (Eq. 9)")]
+    if spec.plastic:
+        cases.append(ForceCase("elastoplastic", sm.StrictGreaterThan(delta, 0),
+                               law.jackson_green_steps(),
+                               "Jackson-Green elasto-plastic compression (Eq. 10)"))
+        cases.append(ForceCase("restitution", sm.StrictGreaterThan(delta, law.delta_r),
+                               _single(law.restitution_force()),
+                               "elastic restitution about the permanent deformation (Eq. 11)"))
+    else:  # Hertz only: unloading follows the loading curve
+        cases.append(ForceCase("restitution", sm.StrictGreaterThan(delta, 0), _single(law.hertz_force()),
+                               "Hertz elastic restitution (Eq. 9 unloading)"))
+
+    friction = law.friction_force(s.F, TIP["v_Bx"]) if spec.has_friction else None
+
+    d, d_rate = TIP["delta"], TIP["delta_rate"]
+    events = [
+        Named("contact", d, "delta = 0: the tip reaches the undeformed surface"),
+        Named("max_compression", d_rate, "d(delta)/dt = 0: maximum compression, or reloading"),
+    ]
+    if spec.plastic:
+        events += [
+            Named("yield", d - law.YIELD_ONSET * law.delta_c, "delta = 1.9 delta_c: onset of phase II"),
+            Named("separation", d - law.delta_r, "delta = delta_r: the tip leaves the dented surface"),
+        ]
+    events.append(Named("passes_delta_m", d - delta_m, "delta = delta_m: reloading passes the maximum"))
+
+    T = chain.kinetic_energy
+    outputs = [Named(t.name, TIP[t.name], t.doc) for t in tip]
+    outputs.append(Named("F", s.F, "normal contact force, N"))
+    if spec.has_friction:
+        outputs.append(Named("F_f", s.F_f, "friction force along x, N"))
+    outputs += [Named(f"T{i + 1}", Ti, f"kinetic energy of link {i + 1}, J") for i, Ti in enumerate(T)]
+    outputs.append(Named("T", sum(T), "kinetic energy, J"))
+    outputs.append(Named("V", chain.potential_energy, "potential energy, J"))
+
+    works = [Named("normal", s.F * TIP["v_By"], "power of the normal force, W")]
+    if spec.has_friction:
+        works.append(Named("friction", s.F_f * TIP["v_Bx"], "power of the friction force, W"))
+
+    used: set[sm.Symbol] = set()
+    for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction or 0]:
+        used |= sm.sympify(e).free_symbols
+    order = ["g", "y_s", "E_star", "R", "delta_c", "P_c", "C_j", "B", "delta_m", "delta_r",
+             "R_res", "mu", "eps"]
+    names = {str(x) for x in used} | {"g", "y_s"}
+    params = tuple((f"L{i}", f"length of link {i}, m") for i in range(1, spec.links + 1))
+    params += tuple((f"m{i}", f"mass of link {i}, kg") for i in range(1, spec.links + 1))
+    params += tuple((k, PARAM_DOCS[k]) for k in order if k in names)
+
+    forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
+    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction, tuple(events),
+                            tuple(outputs), tuple(works), params)

@@ -1,0 +1,276 @@
+"""Stage 6 of the pipeline: compile a generated model and the CVODE glue with cffi, cached.
+
+A cache entry is a folder named by a hash of every input of the build: the model spec, the
+generator's own source and templates, the glue, the compiler flags, the SUNDIALS version
+and the Python ABI. Entries are built in a temporary folder and renamed into place (atomic),
+under a per-entry lock so that concurrent processes build once; an entry whose manifest
+does not match its files is moved aside and rebuilt, never trusted.
+"""
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import hashlib
+import importlib.machinery
+import importlib.resources
+import importlib.util
+import json
+import os
+import re
+import shutil
+import sys
+import sysconfig
+import tempfile
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import cffi
+
+from .codegen.emit import GeneratedModel, generate_model
+from .codegen.expressions import ModelSpec
+from .errors import BuildError
+from .sundials import Sundials, find_sundials
+
+COMPILE_ARGS = ("-O2",)
+GLUE_FILES = ("cvode_glue.c", "cvode_glue.h")
+MANIFEST = "manifest.json"
+
+
+@dataclass(frozen=True)
+class CompiledModel:
+    """A loaded extension with what the runtime needs to drive it."""
+
+    spec: ModelSpec
+    ffi: cffi.FFI
+    lib: object
+    path: Path  # the cache entry
+    state_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+    event_names: tuple[str, ...]
+    param_names: tuple[str, ...]
+    phases: tuple[str, ...]
+
+    @property
+    def nstate(self) -> int:
+        return len(self.state_names)
+
+
+def cache_root() -> Path:
+    root = os.environ.get("IMPACTGEN_CACHE_DIR")
+    if root:
+        return Path(root)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "impactgen"
+
+
+def _native(name: str) -> str:
+    return (importlib.resources.files("impactgen") / "native" / name).read_text(encoding="utf-8")
+
+
+def _generator_fingerprint() -> str:
+    """Hash of the generator's code and templates: a change there changes every key."""
+    h = hashlib.sha256()
+    for package, pattern in (("impactgen.codegen", ".py"), ("impactgen.templates", ".j2")):
+        root = importlib.resources.files(package)
+        for entry in sorted(root.iterdir(), key=lambda e: e.name):
+            if entry.name.endswith(pattern):
+                h.update(entry.name.encode())
+                h.update(entry.read_bytes())
+    import sympy
+    h.update(sympy.__version__.encode())
+    return h.hexdigest()
+
+
+def build_key(spec: ModelSpec, sundials: Sundials) -> str:
+    parts = {
+        "spec": spec.to_json(),
+        "generator": _generator_fingerprint(),
+        "glue": [hashlib.sha256(_native(f).encode()).hexdigest() for f in GLUE_FILES],
+        "flags": COMPILE_ARGS,
+        "sundials": [sundials.version, sundials.include_dir, sundials.library_dir, sundials.libraries],
+        "python": [sys.implementation.cache_tag, sysconfig.get_config_var("EXT_SUFFIX"),
+                   sysconfig.get_platform()],
+        "cffi": cffi.__version__,
+    }
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:32]
+
+
+def _glue_cdef() -> str:
+    text = _native("cvode_glue.h")
+    match = re.search(r"/\* cdef-begin.*?\*/(.*)/\* cdef-end \*/", text, re.S)
+    assert match, "cvode_glue.h lacks its cdef markers"
+    return match.group(1)
+
+
+def _file_digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+@contextlib.contextmanager
+def _captured_fds():
+    """Send fds 1 and 2 (where the compiler writes) to a file; yield a reader for it."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    with tempfile.TemporaryFile(mode="w+b") as sink:
+        saved = [os.dup(1), os.dup(2)]
+        try:
+            os.dup2(sink.fileno(), 1)
+            os.dup2(sink.fileno(), 2)
+            yield lambda: (sink.seek(0), sink.read().decode(errors="replace"))[1]
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+
+
+def _first_error(log: str) -> str:
+    for line in log.splitlines():
+        if re.search(r"\berror\b", line, re.I):
+            return line.strip()
+    lines = [ln for ln in log.splitlines() if ln.strip()]
+    return lines[-1].strip() if lines else "no compiler output"
+
+
+def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir: Path) -> Path:
+    (workdir / "model.c").write_text(gen.source)
+    (workdir / "model.h").write_text(gen.header)
+    for name in GLUE_FILES:
+        (workdir / name).write_text(_native(name))
+    ffi = cffi.FFI()
+    ffi.cdef(gen.cdef + _glue_cdef())
+    lib_dirs = [sundials.library_dir] if sundials.library_dir else []
+    ffi.set_source(
+        module_name,
+        '#include "model.h"\n#include "cvode_glue.h"\n',
+        sources=[str(workdir / "model.c"), str(workdir / "cvode_glue.c")],
+        include_dirs=[str(workdir), sundials.include_dir],
+        library_dirs=lib_dirs,
+        runtime_library_dirs=lib_dirs,
+        libraries=list(sundials.libraries) + ["m"],
+        extra_compile_args=list(COMPILE_ARGS),
+    )
+    with _captured_fds() as log:
+        try:
+            so = ffi.compile(tmpdir=str(workdir), verbose=False)
+        except Exception as exc:  # cffi raises distutils/setuptools errors of several kinds
+            raise BuildError(f"compiling the {gen.spec.slug} model failed: {_first_error(log())} "
+                             f"({type(exc).__name__}); build folder kept in {workdir}") from None
+    return Path(so)
+
+
+def _valid(entry: Path) -> dict | None:
+    try:
+        manifest = json.loads((entry / MANIFEST).read_text())
+        so = entry / manifest["library"]
+        if _file_digest(so) != manifest["sha256"]:
+            return None
+        return manifest
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+@contextlib.contextmanager
+def _lock(path: Path):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a+") as fh:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_UN)
+
+
+def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> Path:
+    entry = root / key
+    module_name = f"_impactgen_{key}"
+    with _lock(root / f"{key}.lock"):
+        if _valid(entry):
+            return entry
+        if entry.exists():  # broken or partial: move it aside, then rebuild
+            shutil.rmtree(entry.with_name(entry.name + ".broken"), ignore_errors=True)
+            with contextlib.suppress(OSError):
+                entry.rename(entry.with_name(entry.name + ".broken"))
+        gen = generate_model(spec)
+        work = Path(tempfile.mkdtemp(prefix=f"{key}.tmp-", dir=root))
+        so = _compile(gen, sundials, module_name, work)
+        library = so.name
+        shutil.copy2(so, work / library) if so.parent != work else None
+        meta = {
+            "spec": json.loads(spec.to_json()),
+            "module": module_name,
+            "library": library,
+            "sha256": _file_digest(work / library),
+            "sundials": sundials.version,
+            "state_names": gen.state_names,
+            "output_names": gen.output_names,
+            "event_names": gen.event_names,
+            "param_names": gen.param_names,
+            "phases": gen.phases,
+        }
+        for junk in work.iterdir():  # keep the sources, the library and the manifest only
+            if junk.is_dir():
+                shutil.rmtree(junk)
+            elif junk.suffix == ".o":
+                junk.unlink()
+        (work / MANIFEST).write_text(json.dumps(meta, indent=1))
+        os.rename(work, entry)
+        return entry
+
+
+_loaded: dict[str, CompiledModel] = {}
+_loaded_lock = threading.Lock()
+
+
+def compile_model(spec: ModelSpec) -> CompiledModel:
+    """Return the compiled model for `spec`, building it on first use."""
+    sundials = find_sundials()
+    key = build_key(spec, sundials)
+    with _loaded_lock:
+        if key in _loaded:
+            return _loaded[key]
+        root = cache_root()
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise BuildError(f"cannot create the build cache {root}: {exc}; set "
+                             "IMPACTGEN_CACHE_DIR to a writable folder") from None
+        entry = root / key
+        manifest = _valid(entry)
+        if manifest is None:
+            entry = _build_entry(spec, sundials, key, root)
+            manifest = _valid(entry)
+            if manifest is None:
+                raise BuildError(f"the build in {entry} did not produce a valid library")
+        module = _import(manifest["module"], entry / manifest["library"])
+        compiled = CompiledModel(
+            spec=spec, ffi=module.ffi, lib=module.lib, path=entry,
+            state_names=tuple(manifest["state_names"]),
+            output_names=tuple(manifest["output_names"]),
+            event_names=tuple(manifest["event_names"]),
+            param_names=tuple(manifest["param_names"]),
+            phases=tuple(manifest["phases"]),
+        )
+        _loaded[key] = compiled
+        return compiled
+
+
+def _import(name: str, path: Path) -> ModuleType:
+    if name in sys.modules:
+        return sys.modules[name]
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    if spec is None:
+        raise BuildError(f"cannot load the compiled model {path}")
+    try:
+        module = importlib.util.module_from_spec(spec)
+        loader.exec_module(module)
+    except ImportError as exc:
+        raise BuildError(f"cannot load the compiled model {path}: {exc}; delete the cache "
+                         f"folder {path.parent} to rebuild") from None
+    sys.modules[name] = module
+    return module

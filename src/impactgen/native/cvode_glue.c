@@ -1,0 +1,267 @@
+/*
+ * cvode_glue.c: one CVODE integrator per simulation, re-initialised at each phase switch
+ * (the force law changes there, so the step history must not be carried across).
+ * Supports SUNDIALS 6.x and 7.x.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_types.h>
+#include <sundials/sundials_version.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "cvode_glue.h"
+
+#ifndef SUNDIALS_VERSION_MAJOR
+#error "SUNDIALS_VERSION_MAJOR is not defined: impactgen needs SUNDIALS 6 or 7"
+#endif
+#if SUNDIALS_VERSION_MAJOR < 6
+#error "impactgen needs SUNDIALS 6 or newer"
+#endif
+
+struct ig_solver {
+    SUNContext ctx;
+    void *cvode;
+    N_Vector y;
+    N_Vector abstol;
+    SUNMatrix A;
+    SUNLinearSolver LS;
+    const model_params *params;
+    int events[MODEL_NEVENT];
+    int nevents;
+    double t_stop;
+    long max_steps;
+    long segment_steps;
+    ig_stats total;   /* counters of finished segments */
+    int initialised;  /* CVodeInit has been called */
+    int active;       /* a segment is under way */
+    char message[512];
+};
+
+static void set_message(ig_solver *s, const char *text)
+{
+    snprintf(s->message, sizeof s->message, "%s", text);
+}
+
+/* ---- error messages: keep CVODE's last message instead of printing it to stderr ---- */
+#if SUNDIALS_VERSION_MAJOR >= 7
+static void on_error(int line, const char *func, const char *file, const char *msg,
+                     SUNErrCode code, void *data, SUNContext ctx)
+{
+    (void)line; (void)file; (void)code; (void)ctx;
+    ig_solver *s = (ig_solver *)data;
+    snprintf(s->message, sizeof s->message, "%s: %s", func ? func : "CVODE", msg ? msg : "");
+}
+#else
+static void on_error(int code, const char *module, const char *func, char *msg, void *data)
+{
+    (void)module;
+    ig_solver *s = (ig_solver *)data;
+    if (code >= 0) return; /* a warning, not a failure */
+    snprintf(s->message, sizeof s->message, "%s: %s", func ? func : "CVODE", msg ? msg : "");
+}
+#endif
+
+static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
+{
+    const ig_solver *s = (const ig_solver *)user_data;
+    return model_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), s->params);
+}
+
+static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *user_data)
+{
+    const ig_solver *s = (const ig_solver *)user_data;
+    double ev[MODEL_NEVENT];
+    model_events(t, N_VGetArrayPointer(y), ev, s->params);
+    for (int k = 0; k < s->nevents; ++k) g[k] = ev[s->events[k]];
+    return 0;
+}
+
+static void add_counters(const ig_solver *s, ig_stats *st)
+{
+    long v;
+    if (!s->initialised) return;
+    if (CVodeGetNumSteps(s->cvode, &v) == CV_SUCCESS) st->nsteps += v;
+    if (CVodeGetNumRhsEvals(s->cvode, &v) == CV_SUCCESS) st->nfev += v;
+    if (CVodeGetNumJacEvals(s->cvode, &v) == CV_SUCCESS) st->njev += v;
+    if (CVodeGetNumLinSolvSetups(s->cvode, &v) == CV_SUCCESS) st->nlinsetups += v;
+    if (CVodeGetNumErrTestFails(s->cvode, &v) == CV_SUCCESS) st->netfails += v;
+    if (CVodeGetNumNonlinSolvConvFails(s->cvode, &v) == CV_SUCCESS) st->nnlsfails += v;
+    if (CVodeGetNumGEvals(s->cvode, &v) == CV_SUCCESS) st->ngev += v;
+}
+
+void ig_solver_free(ig_solver *s)
+{
+    if (!s) return;
+    if (s->cvode) CVodeFree(&s->cvode);
+    if (s->LS) SUNLinSolFree(s->LS);
+    if (s->A) SUNMatDestroy(s->A);
+    if (s->y) N_VDestroy(s->y);
+    if (s->abstol) N_VDestroy(s->abstol);
+    if (s->ctx) SUNContext_Free(&s->ctx);
+    free(s);
+}
+
+ig_solver *ig_solver_new(int method, double rtol, const double *atol, long max_steps,
+                         char *err, int errlen)
+{
+    ig_solver *s = (ig_solver *)calloc(1, sizeof *s);
+    const char *failed = NULL;
+    if (!s) {
+        snprintf(err, (size_t)errlen, "out of memory");
+        return NULL;
+    }
+    if (method != 0 && method != 1) failed = "method must be 0 (BDF) or 1 (Adams)";
+    else if (!(rtol > 0.0) || max_steps <= 0) failed = "rtol and max_steps must be positive";
+#if SUNDIALS_VERSION_MAJOR >= 7
+    else if (SUNContext_Create(SUN_COMM_NULL, &s->ctx) != 0) failed = "SUNContext_Create failed";
+#else
+    else if (SUNContext_Create(NULL, &s->ctx) != 0) failed = "SUNContext_Create failed";
+#endif
+    if (!failed) {
+#if SUNDIALS_VERSION_MAJOR >= 7
+        SUNContext_ClearErrHandlers(s->ctx);
+        SUNContext_PushErrHandler(s->ctx, on_error, s);
+#endif
+        s->y = N_VNew_Serial(MODEL_NSTATE, s->ctx);
+        s->abstol = N_VNew_Serial(MODEL_NSTATE, s->ctx);
+        if (s->y) s->A = SUNDenseMatrix(MODEL_NSTATE, MODEL_NSTATE, s->ctx);
+        if (s->A) s->LS = SUNLinSol_Dense(s->y, s->A, s->ctx);
+        s->cvode = CVodeCreate(method == 0 ? CV_BDF : CV_ADAMS, s->ctx);
+        if (!s->y || !s->abstol || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
+    }
+    if (!failed) {
+        double *a = N_VGetArrayPointer(s->abstol);
+        for (int k = 0; k < MODEL_NSTATE; ++k) {
+            if (!(atol[k] > 0.0)) failed = "every atol entry must be positive";
+            a[k] = atol[k];
+        }
+    }
+    if (!failed) {
+#if SUNDIALS_VERSION_MAJOR < 7
+        CVodeSetErrHandlerFn(s->cvode, on_error, s);
+#endif
+        /* CVodeInit once here; every segment re-initialises with CVodeReInit. */
+        N_VConst(0.0, s->y);
+        if (CVodeInit(s->cvode, rhs, 0.0, s->y) != CV_SUCCESS) failed = "CVodeInit failed";
+        else if (CVodeSVtolerances(s->cvode, rtol, s->abstol) != CV_SUCCESS) failed = "CVodeSVtolerances failed";
+        else if (CVodeSetUserData(s->cvode, s) != CV_SUCCESS) failed = "CVodeSetUserData failed";
+        else if (CVodeSetLinearSolver(s->cvode, s->LS, s->A) != CV_SUCCESS) failed = "CVodeSetLinearSolver failed";
+        else if (CVodeSetNoInactiveRootWarn(s->cvode) != CV_SUCCESS) failed = "CVodeSetNoInactiveRootWarn failed";
+        else if (CVodeSetMaxConvFails(s->cvode, 50) != CV_SUCCESS) failed = "CVodeSetMaxConvFails failed";
+        else if (CVodeSetMaxErrTestFails(s->cvode, 50) != CV_SUCCESS) failed = "CVodeSetMaxErrTestFails failed";
+    }
+    if (failed) {
+        snprintf(err, (size_t)errlen, "%s%s%s", failed, s->message[0] ? ": " : "", s->message);
+        ig_solver_free(s);
+        return NULL;
+    }
+    s->max_steps = max_steps;
+    s->initialised = 1;
+    /* Counters restart at every CVodeReInit: keep the totals in s->total. */
+    memset(&s->total, 0, sizeof s->total);
+    return s;
+}
+
+int ig_segment_start(ig_solver *s, const model_params *params, double t0, const double *y0,
+                     double t_stop, const int *events, const int *directions, int nevents)
+{
+    if (!s || !params || !y0 || nevents < 0 || nevents > MODEL_NEVENT || !(t_stop > t0)) {
+        if (s) set_message(s, "ig_segment_start: bad arguments (t_stop must exceed t0)");
+        return IG_ERR_USAGE;
+    }
+    for (int k = 0; k < nevents; ++k) {
+        if (events[k] < 0 || events[k] >= MODEL_NEVENT) {
+            set_message(s, "ig_segment_start: event index out of range");
+            return IG_ERR_USAGE;
+        }
+    }
+    add_counters(s, &s->total);
+    s->params = params;
+    s->nevents = nevents;
+    for (int k = 0; k < nevents; ++k) s->events[k] = events[k];
+    s->t_stop = t_stop;
+    s->segment_steps = 0;
+    s->message[0] = '\0';
+
+    memcpy(N_VGetArrayPointer(s->y), y0, sizeof(double) * MODEL_NSTATE);
+    if (CVodeReInit(s->cvode, t0, s->y) != CV_SUCCESS) return IG_ERR_SOLVER;
+    if (CVodeRootInit(s->cvode, nevents, nevents > 0 ? roots : NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
+    if (nevents > 0) {
+        int dirs[MODEL_NEVENT];
+        for (int k = 0; k < nevents; ++k) dirs[k] = directions[k];
+        if (CVodeSetRootDirection(s->cvode, dirs) != CV_SUCCESS) return IG_ERR_SOLVER;
+    }
+    if (CVodeSetStopTime(s->cvode, t_stop) != CV_SUCCESS) return IG_ERR_SOLVER;
+    s->active = 1;
+    return 0;
+}
+
+int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, int capacity,
+                       int *n_written, int *roots_found)
+{
+    *n_written = 0;
+    if (!s->active) {
+        set_message(s, "ig_segment_advance: no segment under way");
+        return IG_ERR_USAGE;
+    }
+    while (*n_written < capacity) {
+        if (s->segment_steps >= s->max_steps) {
+            s->active = 0;
+            snprintf(s->message, sizeof s->message,
+                     "more than %ld steps in one phase (solver.max_steps)", s->max_steps);
+            return IG_ERR_TOO_MUCH_WORK;
+        }
+        sunrealtype t;
+        int flag = CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);
+        if (flag < 0) {
+            s->active = 0;
+            if (!s->message[0]) snprintf(s->message, sizeof s->message, "CVode returned %d", flag);
+            return IG_ERR_SOLVER;
+        }
+        s->segment_steps++;
+        t_buf[*n_written] = t;
+        memcpy(y_buf + (size_t)(*n_written) * MODEL_NSTATE, N_VGetArrayPointer(s->y),
+               sizeof(double) * MODEL_NSTATE);
+        (*n_written)++;
+        if (flag == CV_ROOT_RETURN) {
+            CVodeGetRootInfo(s->cvode, roots_found);
+            s->active = 0;
+            return IG_ROOT;
+        }
+        if (flag == CV_TSTOP_RETURN || t >= s->t_stop) {
+            s->active = 0;
+            return IG_REACHED_END;
+        }
+    }
+    return IG_BUFFER_FULL;
+}
+
+void ig_solver_stats(const ig_solver *s, ig_stats *stats)
+{
+    *stats = s->total;
+    add_counters(s, stats);
+}
+
+const char *ig_solver_message(const ig_solver *s)
+{
+    return s->message;
+}
+
+void ig_outputs(const model_params *params, int n, const double *t, const double *y,
+                double *out)
+{
+    for (int k = 0; k < n; ++k) {
+        model_outputs(t[k], y + (size_t)k * MODEL_NSTATE, out + (size_t)k * MODEL_NOUT, params);
+    }
+}
+
+int ig_sundials_version_major(void)
+{
+    return SUNDIALS_VERSION_MAJOR;
+}

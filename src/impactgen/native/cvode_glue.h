@@ -1,0 +1,66 @@
+/*
+ * cvode_glue.h: integrate one phase segment of a generated model with SUNDIALS CVODE.
+ *
+ * Written once for every model: it includes the generated "model.h" and calls model_rhs
+ * and model_events. Python crosses into C once per segment: ig_segment_start sets up the
+ * phase (its force law via params->phase, its active events and their directions), and
+ * ig_segment_advance steps until a root, the stop time or a full sample buffer.
+ */
+#ifndef IMPACTGEN_CVODE_GLUE_H
+#define IMPACTGEN_CVODE_GLUE_H
+
+#include "model.h"
+
+/* cdef-begin: the declarations below are read by cffi as they stand. */
+/* Return codes of ig_segment_advance (>= 0: the segment may continue or is done). */
+#define IG_REACHED_END 0     /* t_stop reached */
+#define IG_ROOT 1            /* an active event fired: see roots_found */
+#define IG_BUFFER_FULL 2     /* the sample buffers are full: call again to continue */
+#define IG_ERR_SOLVER -1     /* CVODE failed: ig_solver_message says why */
+#define IG_ERR_TOO_MUCH_WORK -2  /* more than max_steps steps in this segment */
+#define IG_ERR_USAGE -3      /* bad arguments (a bug in the caller) */
+
+typedef struct ig_solver ig_solver;
+
+typedef struct {
+    long nsteps;     /* internal steps */
+    long nfev;       /* right-hand side calls */
+    long njev;       /* Jacobian evaluations */
+    long nlinsetups; /* linear solver setups */
+    long netfails;   /* error test failures */
+    long nnlsfails;  /* nonlinear convergence failures */
+    long ngev;       /* root function calls */
+} ig_stats;
+
+/* method: 0 = BDF, 1 = Adams. atol has MODEL_NSTATE entries. Returns NULL on failure with a
+ * message in err (errlen bytes). */
+ig_solver *ig_solver_new(int method, double rtol, const double *atol, long max_steps,
+                         char *err, int errlen);
+void ig_solver_free(ig_solver *s);
+
+/* Begin a segment at (t0, y0) under params; the solver keeps a pointer to params, which
+ * must stay alive and unchanged until the segment ends. events/directions: nevents indices
+ * into the model's event functions and their crossing directions (+1 rising, -1 falling,
+ * 0 both). */
+int ig_segment_start(ig_solver *s, const model_params *params, double t0, const double *y0,
+                     double t_stop, const int *events, const int *directions, int nevents);
+
+/* Step until a root, t_stop or capacity samples. Each internal step (and the root or stop
+ * point) is written as t_buf[k], y_buf[k * MODEL_NSTATE ...]. roots_found (nevents ints)
+ * flags the events that fired on IG_ROOT. */
+int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, int capacity,
+                       int *n_written, int *roots_found);
+
+/* Counters accumulated over all segments of this solver. */
+void ig_solver_stats(const ig_solver *s, ig_stats *stats);
+const char *ig_solver_message(const ig_solver *s);
+
+/* Evaluate model_outputs for n samples (one Python crossing for a whole segment). */
+void ig_outputs(const model_params *params, int n, const double *t, const double *y,
+                double *out);
+
+/* Read the SUNDIALS version the glue was compiled against. */
+int ig_sundials_version_major(void);
+/* cdef-end */
+
+#endif /* IMPACTGEN_CVODE_GLUE_H */
