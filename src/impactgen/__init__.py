@@ -5,16 +5,11 @@
     result = impactgen.simulate(scene)          # engine="c" (CVODE) or "reference"
     result.summary, result.phases, result.t, result.q, result.u
 """
+from .engines import simulate
 from .errors import BuildError, ImpactgenError, SceneError, SolverError
 from .scene import Scene, load_scene, scene_from_dict
 
 __version__ = "0.1.0"
-
-
-def simulate(scene: Scene, engine: str = "c", **options):
-    """Simulate `scene` with the compiled C model ("c") or the pure-Python "reference"."""
-    from .simulate import simulate as _simulate
-    return _simulate(scene, engine=engine, **options)
 
 
 __all__ = ["BuildError", "ImpactgenError", "SceneError", "SolverError", "Scene", "load_scene",

@@ -1,0 +1,236 @@
+"""Stage 7 of the pipeline: the phase state machine of MODEL section 4, driving CVODE.
+
+Each phase is one CVODE segment with its own force law (params.phase) and its own active
+events with directions, like solve_ivp's terminal events. Python is crossed once per
+segment; at each switch the machine records what the model fixes there (delta_m, P_m,
+delta_r, R_res) and re-initialises the integrator, since the force law changes.
+
+    free --contact--> elastic --yield--> elastoplastic --max_compression--> restitution
+    elastic --max_compression--> restitution             restitution --separation--> free
+    restitution --rate rises--> reloading --rate falls--> restitution
+    reloading --passes delta_m--> elastic or elastoplastic (the curve it left)
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .build import CompiledModel
+from .contact_constants import (RESIDUAL_LAWS, YIELD_ONSET, ContactConstants, contact_constants,
+                                unloading_radius)
+from .errors import SolverError
+from .results import Impact, PhaseSpan, SimulationResult, Trajectory
+from .scene import Scene
+
+RISING, FALLING = 1, -1
+FIRST_BUFFER = 2048  # samples; doubled while a segment keeps filling it
+
+
+@dataclass(frozen=True)
+class PhaseRule:
+    law: str  # which C force law: free, elastic, elastoplastic, restitution
+    events: tuple[tuple[str, int], ...]  # (event name, direction) that end the phase
+
+
+def phase_rules(plastic: bool) -> dict[str, PhaseRule]:
+    separation = "separation" if plastic else "contact"  # Hertz only: delta_r = 0
+    return {
+        "free": PhaseRule("free", (("contact", RISING),)),
+        "elastic": PhaseRule("elastic", (("max_compression", FALLING),)
+                             + ((("yield", RISING),) if plastic else ())),
+        "elastoplastic": PhaseRule("elastoplastic", (("max_compression", FALLING),)),
+        "restitution": PhaseRule("restitution", ((separation, FALLING), ("max_compression", RISING))),
+        "reloading": PhaseRule("restitution", (("max_compression", FALLING), ("passes_delta_m", RISING))),
+    }
+
+
+class CvodeSession:
+    """One CVODE integrator for a whole simulation; freed when the session ends."""
+
+    def __init__(self, model: CompiledModel, scene: Scene, atol: np.ndarray):
+        self.model = model
+        ffi, lib = model.ffi, model.lib
+        err = ffi.new("char[]", 512)
+        method = 0 if scene.solver.method == "bdf" else 1
+        atol_c = ffi.new("double[]", [float(a) for a in atol])
+        solver = lib.ig_solver_new(method, scene.solver.rtol, atol_c, scene.solver.max_steps, err, 512)
+        if solver == ffi.NULL:
+            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
+        self.solver = ffi.gc(solver, lib.ig_solver_free)
+        self.capacity = FIRST_BUFFER
+        self._alloc()
+
+    def _alloc(self) -> None:
+        ffi, n = self.model.ffi, self.model.nstate
+        self.t_buf = ffi.new("double[]", self.capacity)
+        self.y_buf = ffi.new("double[]", self.capacity * n)
+
+    def segment(self, params, phase: str, t0: float, y0: np.ndarray, t_stop: float,
+                events: tuple[tuple[str, int], ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
+        """Integrate from (t0, y0) until an event or t_stop; return samples and fired events."""
+        ffi, lib, model = self.model.ffi, self.model.lib, self.model
+        idx = ffi.new("int[]", [model.event_names.index(name) for name, _ in events] or [0])
+        dirs = ffi.new("int[]", [d for _, d in events] or [0])
+        y0_c = ffi.new("double[]", [float(v) for v in y0])
+        flag = lib.ig_segment_start(self.solver, params, t0, y0_c, t_stop, idx, dirs, len(events))
+        if flag < 0:
+            raise SolverError(self._message(), phase, t0)
+        ts, ys = [], []
+        n_out = ffi.new("int *")
+        roots = ffi.new("int[]", max(len(events), 1))
+        while True:
+            flag = lib.ig_segment_advance(self.solver, self.t_buf, self.y_buf, self.capacity, n_out, roots)
+            k = n_out[0]
+            ts.append(np.frombuffer(ffi.buffer(self.t_buf, 8 * k), dtype=float).copy())
+            ys.append(np.frombuffer(ffi.buffer(self.y_buf, 8 * k * model.nstate),
+                                    dtype=float).reshape(k, model.nstate).copy())
+            if flag == lib.IG_BUFFER_FULL:
+                self.capacity *= 2
+                self._alloc()
+                continue
+            if flag < 0:
+                t_fail = float(ts[-1][-1]) if k else (float(ts[-2][-1]) if len(ts) > 1 else t0)
+                raise SolverError(self._message(), phase, t_fail)
+            break
+        fired = [events[i][0] for i in range(len(events)) if flag == lib.IG_ROOT and roots[i] != 0]
+        return np.concatenate(ts), np.concatenate(ys), fired
+
+    def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
+        ffi, model = self.model.ffi, self.model
+        nout = len(model.output_names)
+        t = np.ascontiguousarray(t, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)
+        out = np.empty((len(t), nout))
+        model.lib.ig_outputs(params, len(t), ffi.cast("double *", t.ctypes.data),
+                             ffi.cast("double *", y.ctypes.data), ffi.cast("double *", out.ctypes.data))
+        return out
+
+    def stats(self) -> dict[str, int]:
+        st = self.model.ffi.new("ig_stats *")
+        self.model.lib.ig_solver_stats(self.solver, st)
+        return {k: int(getattr(st, k)) for k in ("nsteps", "nfev", "njev", "nlinsetups",
+                                                   "netfails", "nnlsfails", "ngev")}
+
+    def _message(self) -> str:
+        text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
+        return text or "CVODE failed without a message"
+
+
+def default_atol(scene: Scene, nstate: int) -> np.ndarray:
+    """solver.atol for angles and speeds; the works (J) get atol scaled by a typical energy."""
+    n = scene.n
+    atol = np.full(nstate, scene.solver.atol)
+    energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
+    atol[2 * n:] = scene.solver.atol * energy_scale
+    return atol
+
+
+def surface_height(scene: Scene) -> float:
+    if scene.surface_height is not None:
+        return scene.surface_height
+    return sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))
+
+
+def fill_params(model: CompiledModel, scene: Scene, consts: ContactConstants):
+    params = model.ffi.new("model_params *")
+    values = {f"L{i + 1}": L for i, L in enumerate(scene.chain.length)}
+    values.update({f"m{i + 1}": m for i, m in enumerate(scene.chain.mass)})
+    values.update(g=scene.chain.gravity, y_s=surface_height(scene), E_star=consts.E_star,
+                  R=consts.R, delta_c=consts.delta_c, P_c=consts.P_c, C_j=consts.C_j, B=consts.B,
+                  delta_m=0.0, delta_r=0.0, R_res=consts.R, mu=scene.contact.friction,
+                  eps=scene.contact.friction_eps)
+    for name in model.param_names:
+        setattr(params, name, values[name])
+    return params
+
+
+def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao") -> SimulationResult:
+    """Simulate `scene` with the compiled `model` from phase to phase."""
+    started = time.perf_counter()
+    consts = contact_constants(scene)
+    plastic = model.spec.plastic
+    rules = phase_rules(plastic)
+    law_code = {name: i for i, name in enumerate(("free", "elastic", "elastoplastic", "restitution"))}
+    residual = RESIDUAL_LAWS[residual_law]
+    params = fill_params(model, scene, consts)
+    session = CvodeSession(model, scene, default_atol(scene, model.nstate))
+    out_index = {name: i for i, name in enumerate(model.output_names)}
+
+    y = np.concatenate([scene.q0, scene.u0, np.zeros(model.nstate - 2 * scene.n)])
+    t = 0.0
+    first = session.outputs(params, np.array([t]), y[None, :])[0]
+    delta0, rate0 = first[out_index["delta"]], first[out_index["delta_rate"]]
+    touching = delta0 >= -1e-12 * max(1.0, sum(scene.chain.length))
+    phase = "elastic" if touching and rate0 > 0 else "free"
+    t_end = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
+
+    ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first[None, :]], [np.array([phase])]
+    spans: list[PhaseSpan] = []
+    impacts: list[Impact] = []
+    n_samples = 1
+    if phase == "elastic":
+        impacts.append(Impact(t_start=t, i_start=0))
+    status, message = "ok", ""
+
+    while True:
+        rule = rules[phase]
+        params.phase = law_code[rule.law]
+        seg_t, seg_y, fired = session.segment(params, phase, t, y, t_end, rule.events)
+        seg_out = session.outputs(params, seg_t, seg_y)
+        ts.append(seg_t), ys.append(seg_y), outs.append(seg_out)
+        labels.append(np.full(len(seg_t), phase))
+        n_samples += len(seg_t)
+        t, y, last = float(seg_t[-1]), seg_y[-1].copy(), seg_out[-1]
+        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end"))
+        if not fired:
+            if not impacts and scene.solver.t_end is None:
+                status = "no-impact"
+                message = f"no contact within solver.t_max = {scene.solver.t_max:g} s"
+            break
+        new_phase = _next_phase(phase, fired, plastic, params, consts)
+        impact = impacts[-1] if impacts else None
+        if new_phase == "elastic" and phase == "free":  # a new impact on the original surface
+            params.delta_m, params.delta_r, params.R_res = 0.0, 0.0, consts.R
+            impacts.append(Impact(t_start=t, i_start=n_samples - 1))
+            impact = impacts[-1]
+        elif new_phase == "restitution" and phase in ("elastic", "elastoplastic"):
+            delta_m, P_m = last[out_index["delta"]], last[out_index["F"]]
+            delta_r = residual(delta_m, consts.delta_c) if plastic else 0.0
+            params.delta_m = delta_m
+            if plastic:
+                params.delta_r = delta_r
+                params.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
+            impact.delta_m, impact.P_m, impact.delta_r = delta_m, P_m, delta_r
+            impact.R_res = params.R_res if plastic else consts.R
+        if impact is not None and phase != "free":
+            impact.switches.append((t, phase, new_phase))
+        if new_phase == "free":
+            impact.t_end, impact.i_end = t, n_samples - 1
+            if scene.solver.t_end is None:
+                break
+        phase = new_phase
+
+    trajectory = Trajectory(
+        t=np.concatenate(ts), y=np.concatenate(ys), phase=np.concatenate(labels),
+        outputs={name: col for name, col in zip(model.output_names, np.concatenate(outs).T)},
+    )
+    stats = session.stats()
+    stats.update(segments=len(spans), samples=n_samples, wall_s=time.perf_counter() - started)
+    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
+
+
+def _next_phase(phase: str, fired: list[str], plastic: bool, params, consts: ContactConstants) -> str:
+    """The phase after `phase` when the events `fired` (MODEL section 4)."""
+    if phase == "free":
+        return "elastic"
+    if phase in ("elastic", "elastoplastic"):
+        return "restitution" if "max_compression" in fired else "elastoplastic"
+    if phase == "restitution":
+        return "free" if ("separation" in fired or "contact" in fired) else "reloading"
+    # reloading: back past delta_m onto the loading curve it left, or unloading again
+    if "passes_delta_m" in fired:
+        return "elastoplastic" if plastic and params.delta_m >= YIELD_ONSET * consts.delta_c else "elastic"
+    return "restitution"
