@@ -203,7 +203,7 @@ def _checked(key: str, value: Any, spec: Key) -> Any:
         for i, x in enumerate(values):
             reason = spec.check(x)
             if reason:
-                where = f"{key}[{i}]" if isinstance(value, tuple) and len(values) > 1 else key
+                where = f"{key}[{i}]" if isinstance(value, tuple) else key
                 raise SceneError(where, f"{reason}, got {x!r}")
     return value
 
@@ -222,9 +222,10 @@ def _coerce(key: str, v: Any, spec: Key, n: int) -> Any:
         if spec.choices and v not in spec.choices:
             raise SceneError(key, f"{v!r} is not one of {', '.join(spec.choices)}")
         return v
-    if spec.kind == "floats":
-        vals = _numbers(key, v, n) if isinstance(v, list) else (_number(key, v),) * n
-        return _checked(key, vals, spec)
+    if spec.kind == "floats":  # one number for every link, or a list of n
+        if isinstance(v, list):
+            return _checked(key, _numbers(key, v, n), spec)
+        return (_checked(key, _number(key, v), spec),) * n
     if spec.kind == "list":
         return _numbers(key, v, n)
     if spec.kind == "height":

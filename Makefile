@@ -1,0 +1,23 @@
+# Two commands do all the set-up on a fresh machine (see README.md):
+#   make demo   generate, compile and simulate the paper's double pendulum
+#   make test   run the test suite
+VENV ?= .venv
+STAMP := $(VENV)/.impactgen-installed
+
+.PHONY: setup demo test clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml scripts/setup.sh
+	VENV=$(VENV) ./scripts/setup.sh
+	touch $@
+
+demo: $(STAMP)
+	$(VENV)/bin/impactgen run scenes/paper.toml
+	$(VENV)/bin/python scripts/paper_table.py
+
+test: $(STAMP)
+	$(VENV)/bin/python -m pytest -q
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -1,0 +1,109 @@
+"""Scene files: valid ones load, and every bad one names its key (exit code 2 at the CLI)."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import impactgen
+from impactgen.errors import SceneError
+from impactgen.scene import parse_override
+from conftest import PAPER
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover
+    import tomli as tomllib
+
+
+def paper_dict() -> dict:
+    return tomllib.loads(PAPER.read_text())
+
+
+def test_paper_scene_loads_with_its_values(paper_scene):
+    s = paper_scene
+    assert s.name == "paper-double-pendulum" and s.n == 2
+    assert s.chain.length == (1.0, 1.0) and s.chain.mass == (1.0, 1.0)
+    assert s.q0 == pytest.approx((math.radians(-70), math.radians(-60)))
+    assert s.u0 == (-0.1, -0.2)
+    assert s.surface_height is None and s.solver.t_end is None
+    assert s.contact.friction == 0.2 and s.solver.method == "bdf"
+
+
+def test_overrides_replace_values():
+    s = impactgen.load_scene(PAPER, overrides={"initial.u": [-0.1, -0.3], "solver.method": "adams",
+                                               "initial.q": [-1.0, -1.1]})
+    assert s.u0 == (-0.1, -0.3) and s.solver.method == "adams" and s.q0 == (-1.0, -1.1)
+
+
+def test_override_values_are_parsed_as_toml():
+    assert parse_override("initial.u=[-0.1,-0.3]") == ("initial.u", [-0.1, -0.3])
+    assert parse_override("solver.rtol=1e-8") == ("solver.rtol", 1e-8)
+    assert parse_override("solver.method=adams") == ("solver.method", "adams")
+    assert parse_override('name="x"') == ("name", "x")
+
+
+def _mutate(path: str, value) -> dict:
+    raw = paper_dict()
+    section, _, key = path.rpartition(".")
+    target = raw.setdefault(section, {}) if section else raw
+    if value is KeyError:
+        del target[key]
+    else:
+        target[key] = value
+    return raw
+
+
+@pytest.mark.parametrize("path, value, key, words", [
+    ("chain.mas", 1.0, "chain.mas", "did you mean 'chain.mass'"),
+    ("chain.mass", KeyError, "chain.mass", "missing"),
+    ("chain.mass", "heavy", "chain.mass", "expected a number"),
+    ("chain.mass", -1.0, "chain.mass", "> 0"),
+    ("chain.mass", [1.0, 0.0], "chain.mass[1]", "> 0"),
+    ("chain.length", [1.0], "chain.length", "2 values"),
+    ("chain.links", 2.5, "chain.links", "integer"),
+    ("chain.links", 0, "chain.links", "between 1 and 60"),
+    ("rod.nu", 0.5, "rod.nu", "(-1, 0.5)"),
+    ("surface.E", 0.0, "surface.E", "> 0"),
+    ("rod.tip_radius", float("nan"), "rod.tip_radius", "finite"),
+    ("contact.friction", -0.1, "contact.friction", ">= 0"),
+    ("contact.model", "rigid", "contact.model", "three-phase"),
+    ("initial.u", [0.1], "initial.u", "2 values"),
+    ("solver.rtol", 2.0, "solver.rtol", "(0, 1)"),
+    ("surface.height", "floor", "surface.height", "initial"),
+    ("name", "../../etc", "name", "not a valid name"),
+])
+def test_bad_values_name_their_key(path, value, key, words):
+    with pytest.raises(SceneError) as err:
+        impactgen.scene_from_dict(_mutate(path, value))
+    assert err.value.key == key
+    assert words in str(err.value)
+
+
+def test_both_or_neither_initial_angle_is_an_error():
+    raw = paper_dict()
+    raw["initial"]["q"] = [-1.0, -1.0]
+    with pytest.raises(SceneError, match="exactly one"):
+        impactgen.scene_from_dict(raw)
+
+
+def test_tip_inside_the_surface_is_an_error():
+    raw = paper_dict()
+    raw["surface"]["height"] = 0.0  # the tip starts at y = -1.81 m
+    with pytest.raises(SceneError, match="inside the surface") as err:
+        impactgen.scene_from_dict(raw)
+    assert err.value.key == "surface.height"
+
+
+def test_unreadable_and_invalid_files(tmp_path):
+    with pytest.raises(SceneError, match="not found"):
+        impactgen.load_scene(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = \n")
+    with pytest.raises(SceneError, match="not valid TOML"):
+        impactgen.load_scene(bad)
+
+
+def test_unknown_override_key_is_an_error():
+    with pytest.raises(SceneError, match="unknown key"):
+        impactgen.load_scene(PAPER, overrides={"solver.rtoll": 1e-8})
