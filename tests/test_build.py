@@ -1,0 +1,82 @@
+"""The compiled-model cache: reuse, rebuild of broken entries, concurrency, clear failures."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from impactgen import build
+from impactgen.build import compile_model
+from impactgen.codegen.expressions import ModelSpec
+from impactgen.errors import BuildError
+
+SPEC = ModelSpec(1, "hertz", "none")
+
+
+def _compile_in_subprocess(cache: Path) -> subprocess.Popen:
+    code = ("from impactgen.build import compile_model; from impactgen.codegen.expressions import ModelSpec;"
+            "m = compile_model(ModelSpec(1, 'hertz', 'none')); print(m.path)")
+    env = {**os.environ, "IMPACTGEN_CACHE_DIR": str(cache)}
+    return subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def test_same_structure_reuses_the_loaded_model():
+    assert compile_model(SPEC) is compile_model(SPEC)
+
+
+def test_a_new_process_loads_the_cache_without_rebuilding(tmp_path):
+    first = _compile_in_subprocess(tmp_path)
+    out, err = first.communicate(timeout=300)
+    assert first.returncode == 0, err
+    entry = Path(out.strip())
+    library = entry / json.loads((entry / "manifest.json").read_text())["library"]
+    stamp = library.stat().st_mtime_ns
+    second = _compile_in_subprocess(tmp_path)
+    out2, err2 = second.communicate(timeout=300)
+    assert second.returncode == 0, err2
+    assert Path(out2.strip()) == entry and library.stat().st_mtime_ns == stamp
+
+
+def test_concurrent_builds_of_one_model_all_succeed(tmp_path):
+    procs = [_compile_in_subprocess(tmp_path) for _ in range(4)]
+    paths = set()
+    for p in procs:
+        out, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err
+        paths.add(out.strip())
+    assert len(paths) == 1
+    assert not list(tmp_path.glob("*.tmp-*"))  # no half-built folder left behind
+
+
+def test_corrupted_library_is_rebuilt(tmp_path, monkeypatch):
+    monkeypatch.setenv("IMPACTGEN_CACHE_DIR", str(tmp_path))
+    proc = _compile_in_subprocess(tmp_path)
+    out, _ = proc.communicate(timeout=300)
+    entry = Path(out.strip())
+    manifest = json.loads((entry / "manifest.json").read_text())
+    (entry / manifest["library"]).write_bytes(b"not a shared library")
+    assert build._valid(entry) is None
+    proc = _compile_in_subprocess(tmp_path)
+    out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    assert build._valid(entry) is not None
+
+
+def test_missing_sundials_says_how_to_install(monkeypatch):
+    from impactgen import sundials
+    monkeypatch.setattr(sundials, "_prefixes", lambda: [Path("/nonexistent")])
+    monkeypatch.setattr(sundials, "_pkg_config_include", lambda: [])
+    with pytest.raises(BuildError, match="apt-get install libsundials-dev"):
+        sundials.find_sundials()
+
+
+def test_compiler_failure_is_a_build_error_with_the_first_error(tmp_path, monkeypatch):
+    monkeypatch.setenv("IMPACTGEN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(build, "COMPILE_ARGS", ("-O2", "-DNOT_A_MODEL", "-include", "/nonexistent/header.h"))
+    with pytest.raises(BuildError, match="compiling the .* model failed"):
+        build._build_entry(SPEC, build.find_sundials(), "broken" + "0" * 26, tmp_path)

@@ -1,0 +1,135 @@
+"""The phase machine: every path of MODEL section 4, later impacts, free flight, no impact."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactgen
+from impactgen.contact_constants import (YIELD_ONSET, contact_constants, hertz_force,
+                                         residual_deformation_marghitu_zhao)
+from impactgen.phases import _next_phase, phase_rules
+from conftest import PAPER
+
+
+def tip_height(scene) -> float:
+    return sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))
+
+
+def spans_are_contiguous(result) -> bool:
+    return all(a.t1 == b.t0 for a, b in zip(result.phases, result.phases[1:]))
+
+
+def test_critical_load_is_the_hertz_force_at_the_critical_deformation(paper_scene):
+    c = contact_constants(paper_scene)
+    assert c.P_c == pytest.approx(hertz_force(c.delta_c, c.E_star, c.R), rel=1e-12)
+
+
+def test_residual_law_is_zero_up_to_the_critical_deformation():
+    assert residual_deformation_marghitu_zhao(0.5e-6, 1e-6) == 0.0
+    assert residual_deformation_marghitu_zhao(1e-6, 1e-6) == pytest.approx(0.0, abs=1e-22)
+    assert 0 < residual_deformation_marghitu_zhao(5e-6, 1e-6) < 5e-6
+
+
+def test_hertz_model_is_elastic_with_no_permanent_deformation():
+    scene = impactgen.load_scene(PAPER, overrides={"contact.model": "hertz", "contact.friction": 0.0})
+    result = impactgen.simulate(scene)
+    s = result.summary
+    assert [p.phase for p in result.phases] == ["elastic", "restitution"]
+    assert s["delta_r"] == 0.0
+    assert s["R_res"] == pytest.approx(scene.tip_radius)
+    # no dissipation at all: the normal force gives back all it took
+    assert abs(s["energy"]["W_normal"]) < 1e-9 * s["T0"]
+    assert s["delta_T"] == pytest.approx(-s["energy"]["W_gravity"], abs=1e-9)
+
+
+def test_slow_impact_goes_straight_from_elastic_to_restitution():
+    scene = impactgen.load_scene(PAPER, overrides={"initial.u": [-0.001, -0.002]})
+    result = impactgen.simulate(scene)
+    s = result.summary
+    c = contact_constants(scene)
+    assert [p.phase for p in result.phases] == ["elastic", "restitution"]
+    assert s["delta_max"] < c.delta_c  # within the elastic range
+    assert s["delta_r"] == 0.0
+
+
+def test_elastic_maximum_between_yield_and_onset_keeps_a_dent():
+    c = contact_constants(impactgen.load_scene(PAPER))
+    # Find an approach speed whose elastic maximum lies in (delta_c, 1.9 delta_c) by bisection.
+    lo, hi = 0.001, 0.2
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        s = impactgen.simulate(impactgen.load_scene(PAPER, overrides={"initial.u": [-mid / 2, -mid]})).summary
+        if s["delta_max"] < 1.4 * c.delta_c:
+            lo = mid
+        else:
+            hi = mid
+        if c.delta_c < s["delta_max"] < YIELD_ONSET * c.delta_c and s["delta_r"] > 0:
+            break
+    assert c.delta_c < s["delta_max"] < YIELD_ONSET * c.delta_c
+    assert 0 < s["delta_r"] < s["delta_max"]
+    assert [sw["to"] for sw in s["switches"]] == ["restitution", "free"]
+
+
+def test_no_phase_ends_at_its_own_start(paper_result):
+    assert all(p.t1 > p.t0 for p in paper_result.phases)
+    assert spans_are_contiguous(paper_result)
+
+
+def test_free_flight_before_contact():
+    scene0 = impactgen.load_scene(PAPER)
+    scene = impactgen.load_scene(PAPER, overrides={"surface.height": tip_height(scene0) - 0.01})
+    result = impactgen.simulate(scene)
+    assert [p.phase for p in result.phases] == ["free", "elastic", "elastoplastic", "restitution"]
+    impact = result.impacts[0]
+    assert impact.t_start == pytest.approx(result.phases[0].t1)
+    i = impact.i_start
+    assert result.delta[i] == pytest.approx(0.0, abs=1e-12)
+    assert result.summary["t_impact"] > 0
+    assert abs(result.summary["energy"]["residual"]) < 1e-6
+
+
+def test_no_impact_within_t_max_is_reported():
+    scene = impactgen.load_scene(PAPER, overrides={"surface.height": -50.0, "solver.t_max": 0.5})
+    result = impactgen.simulate(scene)
+    assert result.status == "no-impact" and "t_max" in result.message
+    assert result.impacts == [] and result.t[-1] == pytest.approx(0.5)
+
+
+def test_touching_but_receding_tip_is_not_an_impact():
+    scene = impactgen.load_scene(PAPER, overrides={"initial.u": [0.1, 0.2], "solver.t_end": 0.05})
+    result = impactgen.simulate(scene)
+    assert result.phases[0].phase == "free"
+    assert result.impacts == [] or result.impacts[0].t_start > 0
+
+
+def test_later_impacts_start_again_on_the_original_surface():
+    scene = impactgen.load_scene(PAPER, overrides={"solver.t_end": 0.2})
+    result = impactgen.simulate(scene)
+    assert len(result.impacts) >= 3
+    assert spans_are_contiguous(result) and all(p.t1 > p.t0 for p in result.phases)
+    for impact in result.impacts:
+        assert result.delta[impact.i_start] == pytest.approx(0.0, abs=1e-12)
+        assert 0 <= impact.delta_r < impact.delta_m
+    # each impact dissipates: the next one is gentler
+    assert result.impacts[1].delta_m < result.impacts[0].delta_m
+    assert result.t[-1] == pytest.approx(0.2)
+    E = result.T + result.V - result.W_normal - result.W_friction
+    assert np.max(np.abs(E - E[0])) < 1e-6
+
+
+def test_reloading_rules_follow_the_curve_it_left():
+    rules = phase_rules(plastic=True)
+    assert ("max_compression", 1) in rules["restitution"].events  # rate turns positive
+    assert rules["reloading"].law == "restitution"  # reloads along the unloading curve
+    class P:  # the params the machine reads
+        delta_m = 10e-6
+    c = contact_constants(impactgen.load_scene(PAPER))
+    assert _next_phase("restitution", ["max_compression"], True, P, c) == "reloading"
+    assert _next_phase("reloading", ["max_compression"], True, P, c) == "restitution"
+    assert _next_phase("reloading", ["passes_delta_m"], True, P, c) == "elastoplastic"
+    P.delta_m = 1.5 * c.delta_c
+    assert _next_phase("reloading", ["passes_delta_m"], True, P, c) == "elastic"
+    assert _next_phase("reloading", ["passes_delta_m"], False, P, c) == "elastic"
+    assert _next_phase("restitution", ["separation"], True, P, c) == "free"
