@@ -69,6 +69,8 @@ def test_corrupted_library_is_rebuilt(tmp_path, monkeypatch):
 
 def test_missing_sundials_says_how_to_install(monkeypatch):
     from impactgen import sundials
+    sundials.find_sundials.cache_clear()
+    monkeypatch.setattr(sundials, "find_sundials", sundials.find_sundials.__wrapped__)
     monkeypatch.setattr(sundials, "_prefixes", lambda: [Path("/nonexistent")])
     monkeypatch.setattr(sundials, "_pkg_config_include", lambda: [])
     with pytest.raises(BuildError, match="apt-get install libsundials-dev"):

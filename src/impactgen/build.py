@@ -9,6 +9,7 @@ does not match its files is moved aside and rebuilt, never trusted.
 from __future__ import annotations
 
 import contextlib
+import functools
 import fcntl
 import hashlib
 import importlib.machinery
@@ -69,6 +70,7 @@ def _native(name: str) -> str:
     return (importlib.resources.files("impactgen") / "native" / name).read_text(encoding="utf-8")
 
 
+@functools.lru_cache(maxsize=1)
 def _generator_fingerprint() -> str:
     """Hash of the generator's code and templates: a change there changes every key."""
     h = hashlib.sha256()
@@ -222,18 +224,18 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
         return entry
 
 
-_loaded: dict[str, CompiledModel] = {}
+_loaded: dict[tuple[ModelSpec, str], CompiledModel] = {}  # (spec, cache root) -> model
 _loaded_lock = threading.Lock()
 
 
 def compile_model(spec: ModelSpec) -> CompiledModel:
-    """Return the compiled model for `spec`, building it on first use."""
-    sundials = find_sundials()
-    key = build_key(spec, sundials)
+    """Return the compiled model for `spec`, building it on first use (once per process)."""
+    root = cache_root()
     with _loaded_lock:
-        if key in _loaded:
-            return _loaded[key]
-        root = cache_root()
+        if (spec, str(root)) in _loaded:
+            return _loaded[(spec, str(root))]
+        sundials = find_sundials()
+        key = build_key(spec, sundials)
         try:
             root.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -255,7 +257,7 @@ def compile_model(spec: ModelSpec) -> CompiledModel:
             param_names=tuple(manifest["param_names"]),
             phases=tuple(manifest["phases"]),
         )
-        _loaded[key] = compiled
+        _loaded[(spec, str(root))] = compiled
         return compiled
 
 

@@ -1,6 +1,7 @@
 """Find SUNDIALS CVODE (headers and libraries) for the build, version 6.x or 7.x."""
 from __future__ import annotations
 
+import functools
 import os
 import re
 import shutil
@@ -67,6 +68,7 @@ def _multiarch() -> str:
     return sysconfig.get_config_var("MULTIARCH") or "x86_64-linux-gnu"
 
 
+@functools.lru_cache(maxsize=1)
 def find_sundials() -> Sundials:
     """Locate CVODE; raise BuildError saying how to install it when it is missing."""
     candidates = [(p / "include", p) for p in _prefixes()]
