@@ -3,6 +3,7 @@
     impactgen --links N [--out DIR]            generate and compile an N-link steel chain
     impactgen generate SCENE [--out DIR]       generate and compile what SCENE needs
     impactgen run SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
+    impactgen crosscheck [--links 1-6] [--random N] [--seed S] [--json]
 
 Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
 on stderr; --debug shows the traceback.
@@ -39,10 +40,22 @@ def _parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="simulate a scene")
     run.add_argument("scene", type=Path)
     run.add_argument("--engine", choices=("c", "reference"), default="c")
+    run.add_argument("--method", default=None, help="solve_ivp method of the reference engine "
+                     "(Radau, BDF, LSODA, DOP853, RK45)")
     run.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene value, e.g. --set initial.u=[-0.1,-0.3]")
     run.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    cc = sub.add_parser("crosscheck", help="compare the C engine with the reference engine")
+    cc.add_argument("--links", default="1-6", help="steel chains to run, e.g. 1-6 or 2,4")
+    cc.add_argument("--random", type=int, default=0, metavar="N", help="N random scenes")
+    cc.add_argument("--seed", type=int, default=0)
+    cc.add_argument("--rtol", type=float, default=1e-11, help="solver rtol of both engines")
+    cc.add_argument("--tol", type=float, default=1e-7, help="largest relative difference allowed")
+    cc.add_argument("--method", default="Radau", help="solve_ivp method of the reference")
+    cc.add_argument("--json", action="store_true")
+    cc.add_argument("--debug", action="store_true", help="show tracebacks")
 
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path)
@@ -61,6 +74,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = _parser().parse_args(argv)
         if args.command == "run":
             return _run(args)
+        if args.command == "crosscheck":
+            return _crosscheck(args)
         if args.command == "generate":
             from .scene import load_scene
             scene = load_scene(args.scene, _overrides(args.set))
@@ -116,12 +131,64 @@ def _generate(scene, out: Path, prefix: str) -> int:
 def _run(args: argparse.Namespace) -> int:
     import impactgen
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
-    result = impactgen.simulate(scene, engine=args.engine)
+    options = {"method": args.method} if args.method and args.engine == "reference" else {}
+    if args.method and args.engine != "reference":
+        raise SceneError("--method", "only the reference engine takes --method (the C engine "
+                         "uses solver.method = bdf | adams)")
+    result = impactgen.simulate(scene, engine=args.engine, **options)
     if args.json:
         print(json.dumps(result.to_json_dict()))
         return 0
     print(format_summary(result))
     return 0
+
+
+def _link_range(text: str) -> list[int]:
+    try:
+        if "-" in text:
+            lo, hi = (int(v) for v in text.split("-", 1))
+            links = list(range(lo, hi + 1))
+        else:
+            links = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise SceneError("--links", f"expected a range like 1-6 or a list like 2,4, got {text!r}") from None
+    if not links or min(links) < 1 or max(links) > 60:
+        raise SceneError("--links", f"expected link counts from 1 to 60, got {text!r}")
+    return links
+
+
+def _crosscheck(args: argparse.Namespace) -> int:
+    import numpy as np
+    from . import crosscheck as cc
+    from .reference import METHODS
+    if args.method not in METHODS:
+        raise SceneError("--method", f"{args.method!r} is not one of {', '.join(METHODS)}")
+    if not 0 < args.rtol < 1 or not args.tol > 0 or args.random < 0:
+        raise SceneError("crosscheck", "--rtol must lie in (0, 1), --tol be > 0, --random >= 0")
+    rng = np.random.default_rng(args.seed)
+    scenes = cc.standard_scenes(_link_range(args.links), args.rtol)
+    scenes += [cc.random_scene(rng, int(rng.integers(1, 7)), f"random-{args.seed}-{i}", args.rtol)
+               for i in range(args.random)]
+    reports = cc.run(scenes, args.method, progress=cc.stderr_progress)
+    worst = cc.worst(reports)
+    passed = all(v <= args.tol for v, _ in worst.values())
+    if args.json:
+        print(json.dumps({
+            "passed": passed, "tolerance": args.tol, "rtol": args.rtol, "method": args.method,
+            "worst": {q: {"difference": v, "scene": name} for q, (v, name) in worst.items()},
+            "scenes": [{"scene": r.scene.name, "links": r.scene.n, "differences": r.differences,
+                        "wall_c_s": r.wall_c, "wall_reference_s": r.wall_reference} for r in reports],
+        }, default=lambda v: None))
+    else:
+        print(f"{'quantity':<14} {'largest relative difference':>28}   scene")
+        for q, (v, name) in worst.items():
+            flag = "" if v <= args.tol else "   > tolerance"
+            print(f"{q:<14} {v:>28.2e}   {name}{flag}")
+        wall_c = sum(r.wall_c for r in reports)
+        wall_ref = sum(r.wall_reference for r in reports)
+        print(f"{len(reports)} scenes at rtol {args.rtol:g}: C engine {wall_c * 1e3:.1f} ms, reference "
+              f"({args.method}) {wall_ref:.1f} s; {'PASS' if passed else 'FAIL'} (tolerance {args.tol:g})")
+    return 0 if passed else 1
 
 
 def format_summary(result) -> str:

@@ -147,6 +147,13 @@ def fill_params(model: CompiledModel, scene: Scene, consts: ContactConstants):
     return params
 
 
+def set_params(model: CompiledModel, params, **values: float) -> None:
+    """Set the named parameters that this (pruned) model has; skip the others."""
+    for name, value in values.items():
+        if name in model.param_names:
+            setattr(params, name, value)
+
+
 def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao") -> SimulationResult:
     """Simulate `scene` with the compiled `model` from phase to phase."""
     started = time.perf_counter()
@@ -193,18 +200,15 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         new_phase = _next_phase(phase, fired, plastic, params, consts)
         impact = impacts[-1] if impacts else None
         if new_phase == "elastic" and phase == "free":  # a new impact on the original surface
-            params.delta_m, params.delta_r, params.R_res = 0.0, 0.0, consts.R
+            set_params(model, params, delta_m=0.0, delta_r=0.0, R_res=consts.R)
             impacts.append(Impact(t_start=t, i_start=n_samples - 1))
             impact = impacts[-1]
         elif new_phase == "restitution" and phase in ("elastic", "elastoplastic"):
             delta_m, P_m = last[out_index["delta"]], last[out_index["F"]]
             delta_r = residual(delta_m, consts.delta_c) if plastic else 0.0
-            params.delta_m = delta_m
-            if plastic:
-                params.delta_r = delta_r
-                params.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
-            impact.delta_m, impact.P_m, impact.delta_r = delta_m, P_m, delta_r
-            impact.R_res = params.R_res if plastic else consts.R
+            R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star) if plastic else consts.R
+            set_params(model, params, delta_m=delta_m, delta_r=delta_r, R_res=R_res)
+            impact.delta_m, impact.P_m, impact.delta_r, impact.R_res = delta_m, P_m, delta_r, R_res
         if impact is not None and phase != "free":
             impact.switches.append((t, phase, new_phase))
         if new_phase == "free":

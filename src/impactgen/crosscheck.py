@@ -1,0 +1,191 @@
+"""Cross-check the compiled C engine against the independent pure-Python reference.
+
+Two levels: the right-hand sides at random states in every phase, and whole simulations of
+the repository's scenes, steel chains and random scenes, compared quantity by quantity.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from .results import SimulationResult
+from .scene import Scene, scene_from_dict, load_scene, steel_chain_scene
+
+QUANTITIES = ("u_final", "q_final", "delta_max", "delta_r", "delta_T", "t_contact", "switch_times",
+              "trajectory_q")
+SCENES_DIR = Path(__file__).resolve().parents[2] / "scenes"
+
+
+# ----------------------------------------------------------------------------- scenes
+
+def random_scene(rng: np.random.Generator, n: int, name: str, rtol: float) -> Scene:
+    """A random chain approaching the surface: lengths, masses, materials, mu, angles,
+    speeds; half of them start in free flight a little above the surface."""
+    L = rng.uniform(0.3, 1.5, n)
+    q = np.radians(rng.uniform(-150.0, -30.0, n))
+    while True:
+        u = rng.uniform(-1.0, 1.0, n)
+        v_By = float(np.sum(L * u * np.cos(q)))
+        if abs(v_By) > 0.02:
+            break
+    if v_By > 0:  # approach the surface
+        u = -u
+    y_B = float(np.sum(L * np.sin(q)))
+    free_flight = rng.random() < 0.5
+    E = [float(10 ** rng.uniform(10.8, 11.6)) for _ in range(2)]
+    raw = {
+        "name": name,
+        "chain": {"links": n, "length": L.tolist(), "mass": rng.uniform(0.2, 3.0, n).tolist(),
+                  "gravity": 9.81},
+        "rod": {"E": E[0], "nu": float(rng.uniform(0.2, 0.35)),
+                "yield_strength": float(rng.uniform(0.4e9, 2.0e9)),
+                "tip_radius": float(10 ** rng.uniform(-3, -1.7))},
+        "surface": {"E": E[1], "nu": float(rng.uniform(0.2, 0.35)),
+                    "yield_strength": float(rng.uniform(0.4e9, 2.0e9)),
+                    "height": y_B - float(10 ** rng.uniform(-4, -2.5)) if free_flight else "initial"},
+        "contact": {"model": "three-phase" if rng.random() < 0.8 else "hertz",
+                    "friction": 0.0 if rng.random() < 0.25 else float(rng.uniform(0.05, 0.5)),
+                    "friction_eps": float(10 ** rng.uniform(-5, -3))},
+        "initial": {"q": q.tolist(), "u": u.tolist()},
+        "solver": {"rtol": rtol, "atol": rtol * 1e-2},
+    }
+    return scene_from_dict(raw, source=f"<random scene {name}>")
+
+
+def with_tolerance(scene: Scene, rtol: float) -> Scene:
+    return scene.replace(solver=scene.solver.__class__(scene.solver.method, rtol, rtol * 1e-2,
+                                                       scene.solver.t_end, scene.solver.t_max,
+                                                       scene.solver.max_steps))
+
+
+def standard_scenes(links: Iterable[int], rtol: float) -> list[Scene]:
+    """The repository's scenes and the paper's steel chain with each number of links."""
+    scenes = [with_tolerance(load_scene(p), rtol) for p in sorted(SCENES_DIR.glob("*.toml"))]
+    return scenes + [with_tolerance(steel_chain_scene(n), rtol) for n in links]
+
+
+# ----------------------------------------------------------------------------- comparison
+
+def _rel(a: np.ndarray | float, b: np.ndarray | float, floor: float = 1e-300) -> float:
+    a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))
+    return float(np.max(np.abs(a - b)) / max(float(np.max(np.abs(b))), floor))
+
+
+def _hermite_q(result: SimulationResult, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """q of `result` at times t by cubic Hermite interpolation (q and dq/dt = u are known);
+    returns the values and a mask of the times whose bracket lies inside one phase."""
+    ts, q, u, ph = result.t, result.q, result.u, result.phase
+    k = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2)
+    while np.any(ts[k + 1] == ts[k]):  # switch samples appear twice in time: step past them
+        k = np.where(ts[k + 1] == ts[k], np.minimum(k + 1, len(ts) - 2), k)
+    h = ts[k + 1] - ts[k]
+    s = ((t - ts[k]) / np.where(h > 0, h, 1.0))[:, None]
+    h = h[:, None]
+    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
+    values = h00 * q[k] + h10 * h * u[k] + h01 * q[k + 1] + h11 * h * u[k + 1]
+    return values, (ph[k] == ph[k + 1]) & (s[:, 0] >= 0) & (s[:, 0] <= 1)
+
+
+def compare(c: SimulationResult, ref: SimulationResult) -> dict[str, float]:
+    """Largest relative difference per quantity (inf where the phase sequences differ).
+    Vectors are compared in the max norm; delta_r against delta_max when it is ~0; Delta T
+    against T0; switch times against the latest switch time."""
+    a, b = c.summary, ref.summary
+    out = {
+        "u_final": _rel(a["u_final"], b["u_final"]),
+        "q_final": _rel(a["q_final"], b["q_final"]),
+        "delta_max": _rel(a["delta_max"], b["delta_max"], 1e-300),
+        "delta_r": _rel(a["delta_r"], b["delta_r"], 1e-6 * max(b["delta_max"], 1e-300)),
+        # Delta T is a difference of energies of size T0 (and 0 for an elastic impact):
+        # its disagreement is measured against T0.
+        "delta_T": abs(a["delta_T"] - b["delta_T"]) / max(abs(b["T0"]), 1e-300),
+        "t_contact": _rel(a["t_contact"], b["t_contact"], 1e-300),
+    }
+    sa = [(s["from"], s["to"]) for s in a["switches"]]
+    sb = [(s["from"], s["to"]) for s in b["switches"]]
+    if sa != sb or [p.phase for p in c.phases] != [p.phase for p in ref.phases]:
+        out["switch_times"] = math.inf
+    else:
+        times_a = np.array([p.t1 for p in c.phases])
+        times_b = np.array([p.t1 for p in ref.phases])
+        out["switch_times"] = _rel(times_a, times_b, 1e-300) if len(times_b) else 0.0
+    q_c, inside = _hermite_q(c, ref.t)
+    out["trajectory_q"] = _rel(q_c[inside], ref.q[inside]) if inside.any() else 0.0
+    return out
+
+
+@dataclass
+class CaseReport:
+    scene: Scene
+    differences: dict[str, float]
+    wall_c: float
+    wall_reference: float
+
+
+def run_case(scene: Scene, method: str = "Radau") -> CaseReport:
+    from .engines import simulate
+    c = simulate(scene, engine="c")
+    ref = simulate(scene, engine="reference", method=method)
+    return CaseReport(scene, compare(c, ref), c.stats["wall_s"], ref.stats["wall_s"])
+
+
+def run(scenes: list[Scene], method: str = "Radau",
+        progress: Callable[[int, int, Scene], None] | None = None) -> list[CaseReport]:
+    reports = []
+    for i, scene in enumerate(scenes):
+        if progress:
+            progress(i, len(scenes), scene)
+        reports.append(run_case(scene, method))
+    return reports
+
+
+def worst(reports: list[CaseReport]) -> dict[str, tuple[float, str]]:
+    out = {}
+    for q in QUANTITIES:
+        values = [(r.differences[q], r.scene.name) for r in reports]
+        out[q] = max(values, key=lambda v: v[0]) if values else (0.0, "")
+    return out
+
+
+def stderr_progress(i: int, total: int, scene: Scene) -> None:
+    end = "\r" if sys.stderr.isatty() else "\n"
+    print(f"crosscheck [{i + 1}/{total}] {scene.name} ({scene.n} links)".ljust(60), end=end,
+          file=sys.stderr, flush=True)
+
+
+# ----------------------------------------------------------------------------- right-hand sides
+
+PHASE_LAWS = ("free", "elastic", "elastoplastic", "restitution")
+
+
+def rhs_pair(scene: Scene, phase: str, y: np.ndarray, delta_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The C right-hand side (through cffi) and the reference's, at state y in `phase`,
+    with the restitution state set as at a maximum compression delta_m."""
+    from .build import compile_model
+    from .contact_constants import RESIDUAL_LAWS, contact_constants, unloading_radius
+    from .engines import model_spec
+    from .phases import fill_params, set_params
+    from .reference import ReferenceModel
+
+    model = compile_model(model_spec(scene))
+    consts = contact_constants(scene)
+    params = fill_params(model, scene, consts)
+    ref = ReferenceModel.from_scene(scene)
+    P_m = ref.contact.normal_force("elastoplastic" if ref.contact.plastic else "elastic", delta_m)
+    ref.contact.at_maximum_compression(delta_m, P_m)
+    delta_r = RESIDUAL_LAWS["marghitu-zhao"](delta_m, consts.delta_c)
+    set_params(model, params, delta_m=delta_m, delta_r=delta_r,
+               R_res=unloading_radius(P_m, delta_m, delta_r, consts.E_star))
+    params.phase = PHASE_LAWS.index(phase)
+    ffi = model.ffi
+    y_c = ffi.new("double[]", [float(v) for v in y])
+    ydot = ffi.new("double[]", len(y))
+    flag = model.lib.model_rhs(0.0, y_c, ydot, params)
+    if flag != 0:
+        raise ArithmeticError(f"model_rhs returned {flag}")
+    return np.array(list(ydot)), ref.rhs(0.0, np.asarray(y, float), phase)

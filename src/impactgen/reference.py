@@ -1,0 +1,352 @@
+"""The pure-Python reference engine: an independent implementation to check the C against.
+
+It shares no code with codegen/ or the generated C: only the scene loader and the result
+types. Clarity comes first; speed is not a goal.
+
+How the equations were derived (by hand, with Lagrange's equations rather than Kane's
+method and sympy). With absolute angles, the velocity of the mass centre of link j is
+v_Cj = sum_i a_ji L_i u_i e_i', where e_i' = (-sin q_i, cos q_i) and a_ji = 1 for i < j,
+1/2 for i = j, 0 for i > j. The kinetic energy is then T = 1/2 sum_ik M_ik u_i u_k with
+
+    M_ik = c_ik cos(q_i - q_k) + delta_ik m_i L_i^2 / 12,   c_ik = L_i L_k mu_ik,
+    mu_ik = sum_j m_j a_ji a_jk = m_k'/2 + sum_{j > k'} m_j,  k' = max(i, k)   (i != k)
+    mu_ii = m_i/4 + sum_{j > i} m_j.
+
+Lagrange's equations d/dt(dT/du_i) - dT/dq_i = Q_i reduce to
+
+    sum_k M_ik du_k/dt = Q_i - sum_k c_ik sin(q_i - q_k) u_k^2,
+
+with the generalized forces of gravity and of the tip force (F_f, F):
+
+    Q_i = -g L_i cos(q_i) (m_i/2 + sum_{j > i} m_j) + L_i (F cos q_i - F_f sin q_i).
+
+The contact laws are written again from the model documentation (docs/model.md). The phases
+are integrated with scipy.integrate.solve_ivp and its terminal, direction-filtered events.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from .errors import SceneError, SolverError
+from .results import Impact, PhaseSpan, SimulationResult, Trajectory
+from .scene import Scene
+
+METHODS = ("Radau", "BDF", "LSODA", "DOP853", "RK45")
+
+
+# ----------------------------------------------------------------------------- the chain
+
+@dataclass(frozen=True)
+class ChainModel:
+    L: np.ndarray
+    m: np.ndarray
+    g: float
+    c: np.ndarray  # c_ik of the docstring (n x n)
+    inertia: np.ndarray  # m_i L_i^2 / 12
+    gravity_arm: np.ndarray  # m_i/2 + sum_{j>i} m_j
+
+    @classmethod
+    def from_scene(cls, scene: Scene) -> "ChainModel":
+        L, m = np.array(scene.chain.length), np.array(scene.chain.mass)
+        n = len(L)
+        outboard = np.array([m[i + 1:].sum() for i in range(n)])  # sum_{j > i} m_j
+        mu = np.empty((n, n))
+        for i in range(n):
+            for k in range(n):
+                j = max(i, k)
+                mu[i, k] = m[i] / 4 + outboard[i] if i == k else m[j] / 2 + outboard[j]
+        return cls(L, m, scene.chain.gravity, np.outer(L, L) * mu, m * L ** 2 / 12, m / 2 + outboard)
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        return self.c * np.cos(q[:, None] - q[None, :]) + np.diag(self.inertia)
+
+    def accelerations(self, q: np.ndarray, u: np.ndarray, F: float, F_f: float) -> np.ndarray:
+        velocity_terms = (self.c * np.sin(q[:, None] - q[None, :])) @ (u ** 2)
+        Q = -self.g * self.L * np.cos(q) * self.gravity_arm + self.L * (F * np.cos(q) - F_f * np.sin(q))
+        return np.linalg.solve(self.mass_matrix(q), Q - velocity_terms)
+
+    def tip(self, q: np.ndarray, u: np.ndarray) -> tuple[float, float, float, float]:
+        """x_B, y_B, v_Bx, v_By (works on arrays of samples too, q of shape (n, N))."""
+        L = self.L if q.ndim == 1 else self.L[:, None]
+        return ((L * np.cos(q)).sum(0), (L * np.sin(q)).sum(0),
+                (-L * u * np.sin(q)).sum(0), (L * u * np.cos(q)).sum(0))
+
+    def energies(self, q: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Kinetic energy per link (n, N) and potential energy (N,) for samples q, u (n, N)."""
+        n = len(self.L)
+        T = np.empty_like(u)
+        V = np.zeros(q.shape[1])
+        vx = np.zeros(q.shape[1])
+        vy = np.zeros(q.shape[1])
+        x = np.zeros(q.shape[1])
+        y = np.zeros(q.shape[1])
+        for j in range(n):
+            L = self.L[j]
+            vcx = vx - L / 2 * u[j] * np.sin(q[j])
+            vcy = vy + L / 2 * u[j] * np.cos(q[j])
+            T[j] = 0.5 * self.m[j] * (vcx ** 2 + vcy ** 2) + 0.5 * self.inertia[j] * u[j] ** 2
+            V += self.m[j] * self.g * (y + L / 2 * np.sin(q[j]))
+            vx, vy = vx - L * u[j] * np.sin(q[j]), vy + L * u[j] * np.cos(q[j])
+            x, y = x + L * np.cos(q[j]), y + L * np.sin(q[j])
+        return T, V
+
+
+# ----------------------------------------------------------------------------- the contact
+
+@dataclass
+class Contact:
+    """Material constants (docs/model.md section 3) and the state fixed at the switches."""
+
+    E_star: float
+    R: float
+    delta_c: float
+    P_c: float
+    C_j: float
+    B: float
+    mu: float
+    eps: float
+    y_s: float
+    plastic: bool
+    delta_m: float = 0.0
+    delta_r: float = 0.0
+    R_res: float = 0.0
+
+    @classmethod
+    def from_scene(cls, scene: Scene, y_s: float) -> "Contact":
+        Er, Es = scene.rod.E, scene.surface.E
+        E_star = 1.0 / ((1 - scene.rod.nu ** 2) / Er + (1 - scene.surface.nu ** 2) / Es)
+        weak = min((scene.rod, scene.surface), key=lambda mat: mat.yield_strength)
+        C_j = 1.295 * math.exp(0.736 * weak.nu)
+        R = scene.tip_radius
+        p0 = math.pi * C_j * weak.yield_strength / 2  # the pressure scale pi C_j S_y / 2
+        return cls(E_star=E_star, R=R, delta_c=R * (p0 / E_star) ** 2,
+                   P_c=4.0 / 3.0 * (R / E_star) ** 2 * p0 ** 3, C_j=C_j,
+                   B=0.14 * math.exp(23 * weak.yield_strength / E_star),
+                   mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
+                   plastic=scene.contact.model == "three-phase", R_res=R)
+
+    def hertz(self, delta: float, radius: float) -> float:
+        return 4.0 / 3.0 * self.E_star * math.sqrt(radius) * delta ** 1.5 if delta > 0 else 0.0
+
+    def jackson_green(self, delta: float) -> float:
+        if delta <= 0:
+            return 0.0
+        w = delta / self.delta_c
+        a = math.sqrt(self.R * delta * (delta / (1.9 * self.delta_c)) ** self.B)
+        H_Sy = 2.84 - 0.92 * (1 - math.cos(math.pi * a / self.R))
+        return self.P_c * (math.exp(-0.17 * w ** (5 / 12)) * w ** 1.5
+                           + 4 * H_Sy / self.C_j * (1 - math.exp(-(w ** (5 / 9)) / 78)) * w ** 1.1)
+
+    def normal_force(self, phase: str, delta: float) -> float:
+        if phase == "elastic":
+            return self.hertz(delta, self.R)
+        if phase == "elastoplastic":
+            return self.jackson_green(delta)
+        if phase in ("restitution", "reloading"):
+            return self.hertz(delta - self.delta_r, self.R_res) if self.plastic else self.hertz(delta, self.R)
+        return 0.0
+
+    def friction(self, F: float, v_Bx: float) -> float:
+        return -self.mu * F * v_Bx / math.sqrt(v_Bx ** 2 + self.eps ** 2) if self.mu > 0 else 0.0
+
+    def at_maximum_compression(self, delta_m: float, P_m: float) -> None:
+        """Fix delta_m, delta_r (Eq. 12, clamped) and R_res (continuity at delta_m)."""
+        self.delta_m = delta_m
+        if self.plastic:
+            self.delta_r = max(0.0, delta_m * (1 - math.sqrt(6.5 / (delta_m / self.delta_c + 5.5))))
+            self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
+        else:
+            self.delta_r, self.R_res = 0.0, self.R
+
+    def reset(self) -> None:
+        self.delta_m, self.delta_r, self.R_res = 0.0, 0.0, self.R
+
+
+# ----------------------------------------------------------------------------- right-hand side
+
+@dataclass
+class ReferenceModel:
+    chain: ChainModel
+    contact: Contact
+    n: int
+    friction_state: bool  # the state carries W_friction
+
+    @classmethod
+    def from_scene(cls, scene: Scene) -> "ReferenceModel":
+        y_s = scene.surface_height
+        if y_s is None:
+            y_s = sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))
+        return cls(ChainModel.from_scene(scene), Contact.from_scene(scene, y_s), scene.n,
+                   scene.contact.friction > 0)
+
+    def rhs(self, t: float, y: np.ndarray, phase: str) -> np.ndarray:
+        n = self.n
+        q, u = y[:n], y[n:2 * n]
+        _, y_B, v_Bx, v_By = self.chain.tip(q, u)
+        F = self.contact.normal_force(phase, self.contact.y_s - y_B)
+        F_f = self.contact.friction(F, v_Bx)
+        du = self.chain.accelerations(q, u, F, F_f)
+        works = [F * v_By] + ([F_f * v_Bx] if self.friction_state else [])
+        return np.concatenate([u, du, works])
+
+    def delta_and_rate(self, y: np.ndarray) -> tuple[float, float]:
+        n = self.n
+        _, y_B, _, v_By = self.chain.tip(y[:n], y[n:2 * n])
+        return self.contact.y_s - y_B, -v_By
+
+    def outputs(self, t: np.ndarray, y: np.ndarray, phase: str) -> dict[str, np.ndarray]:
+        n = self.n
+        q, u = y[:, :n].T, y[:, n:2 * n].T
+        x_B, y_B, v_Bx, v_By = self.chain.tip(q, u)
+        delta = self.contact.y_s - y_B
+        F = np.array([self.contact.normal_force(phase, d) for d in delta])
+        out = {"x_B": x_B, "y_B": y_B, "v_Bx": v_Bx, "v_By": v_By, "delta": delta, "delta_rate": -v_By, "F": F}
+        if self.friction_state:
+            out["F_f"] = np.array([self.contact.friction(f, v) for f, v in zip(F, v_Bx)])
+        T, V = self.chain.energies(q, u)
+        out.update({f"T{i + 1}": T[i] for i in range(n)})
+        out["T"], out["V"] = T.sum(0), V
+        return out
+
+
+# ----------------------------------------------------------------------------- phase loop
+
+def _event(fn, direction: int):
+    """A terminal solve_ivp event that fires only on crossings in `direction`."""
+    def event(t: float, y: np.ndarray) -> float:
+        return fn(t, y)
+    event.terminal = True
+    event.direction = direction
+    return event
+
+
+def _phase_events(model: ReferenceModel, phase: str) -> dict[str, object]:
+    c = model.contact
+    delta = lambda t, y: model.delta_and_rate(y)[0]  # noqa: E731
+    rate = lambda t, y: model.delta_and_rate(y)[1]  # noqa: E731
+    if phase == "free":
+        return {"contact": _event(delta, 1)}
+    if phase == "elastic":
+        ev = {"max_compression": _event(rate, -1)}
+        if c.plastic:
+            ev["yield"] = _event(lambda t, y: delta(t, y) - 1.9 * c.delta_c, 1)
+        return ev
+    if phase == "elastoplastic":
+        return {"max_compression": _event(rate, -1)}
+    if phase == "restitution":
+        return {"separation": _event(lambda t, y: delta(t, y) - c.delta_r, -1),
+                "reloading": _event(rate, 1)}
+    # reloading
+    return {"unloading": _event(rate, -1),
+            "passes_delta_m": _event(lambda t, y: delta(t, y) - c.delta_m, 1)}
+
+
+def _after(phase: str, event: str, contact: Contact) -> str:
+    table = {("free", "contact"): "elastic", ("elastic", "yield"): "elastoplastic",
+             ("elastic", "max_compression"): "restitution",
+             ("elastoplastic", "max_compression"): "restitution",
+             ("restitution", "separation"): "free", ("restitution", "reloading"): "reloading",
+             ("reloading", "unloading"): "restitution"}
+    if (phase, event) in table:
+        return table[(phase, event)]
+    # reloading passed delta_m: back onto the loading curve it left
+    return "elastoplastic" if contact.plastic and contact.delta_m >= 1.9 * contact.delta_c else "elastic"
+
+
+@dataclass
+class _Recorder:
+    t: list = field(default_factory=list)
+    y: list = field(default_factory=list)
+    phase: list = field(default_factory=list)
+    outputs: list = field(default_factory=list)
+    count: int = 0
+
+    def add(self, model: ReferenceModel, t: np.ndarray, y: np.ndarray, phase: str) -> None:
+        self.t.append(t)
+        self.y.append(y)
+        self.phase.append(np.full(len(t), phase))
+        self.outputs.append(model.outputs(t, y, phase))
+        self.count += len(t)
+
+
+def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
+             atol: float | None = None) -> SimulationResult:
+    """Run `scene` through the phases with solve_ivp; the result has the C engine's shape."""
+    if method not in METHODS:
+        raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
+    if scene.contact.friction > 0 and scene.contact.friction_mode == "coulomb":
+        raise SceneError("contact.friction_mode", "'coulomb' is not available yet; use 'regularized'")
+    started = time.perf_counter()
+    model = ReferenceModel.from_scene(scene)
+    n = scene.n
+    rtol = scene.solver.rtol if rtol is None else rtol
+    atol_q = scene.solver.atol if atol is None else atol
+    nstate = 2 * n + (2 if model.friction_state else 1)
+    energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
+    atol_vec = np.full(nstate, atol_q)
+    atol_vec[2 * n:] = atol_q * energy_scale
+
+    y = np.concatenate([scene.q0, scene.u0, np.zeros(nstate - 2 * n)])
+    t = 0.0
+    delta0, rate0 = model.delta_and_rate(y)
+    touching = delta0 >= -1e-12 * max(1.0, sum(scene.chain.length))
+    phase = "elastic" if touching and rate0 > 0 else "free"
+    t_final = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
+
+    rec = _Recorder()
+    rec.add(model, np.array([t]), y[None, :], phase)
+    spans: list[PhaseSpan] = []
+    impacts: list[Impact] = [Impact(t_start=0.0, i_start=0)] if phase == "elastic" else []
+    stats = {"nsteps": 0, "nfev": 0, "njev": 0}
+    status, message = "ok", ""
+    while True:
+        events = _phase_events(model, phase)
+        names = list(events)
+        sol = solve_ivp(lambda t_, y_, p=phase: model.rhs(t_, y_, p), (t, t_final), y, method=method,
+                        rtol=rtol, atol=atol_vec, events=list(events.values()))
+        if sol.status < 0:
+            raise SolverError(f"solve_ivp ({method}): {sol.message}", phase, float(sol.t[-1]))
+        stats["nsteps"] += len(sol.t) - 1
+        stats["nfev"] += sol.nfev
+        stats["njev"] += sol.njev
+        fired = [names[i] for i, te in enumerate(sol.t_events) if len(te)]
+        seg_t, seg_y = sol.t[1:], sol.y.T[1:]
+        if fired:  # solve_ivp's last sample is the event point
+            seg_t = np.append(seg_t[:-1], sol.t_events[names.index(fired[0])][0])
+            seg_y = np.vstack([seg_y[:-1], sol.y_events[names.index(fired[0])][0]])
+        rec.add(model, seg_t, seg_y, phase)
+        t, y = float(seg_t[-1]), seg_y[-1].copy()
+        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end"))
+        if not fired:
+            if not impacts and scene.solver.t_end is None:
+                status, message = "no-impact", f"no contact within solver.t_max = {scene.solver.t_max:g} s"
+            break
+        new = _after(phase, fired[0], model.contact)
+        impact = impacts[-1] if impacts else None
+        if phase == "free":
+            model.contact.reset()
+            impacts.append(Impact(t_start=t, i_start=rec.count - 1))
+        else:
+            if new == "restitution" and phase in ("elastic", "elastoplastic"):
+                delta_m = model.delta_and_rate(y)[0]
+                model.contact.at_maximum_compression(delta_m, model.contact.normal_force(phase, delta_m))
+                impact.delta_m = delta_m
+                impact.P_m = model.contact.normal_force(phase, delta_m)
+                impact.delta_r, impact.R_res = model.contact.delta_r, model.contact.R_res
+            impact.switches.append((t, phase, new))
+            if new == "free":
+                impact.t_end, impact.i_end = t, rec.count - 1
+                if scene.solver.t_end is None:
+                    break
+        phase = new
+
+    outputs = {k: np.concatenate([o[k] for o in rec.outputs]) for k in rec.outputs[0]}
+    trajectory = Trajectory(np.concatenate(rec.t), np.concatenate(rec.y), np.concatenate(rec.phase), outputs)
+    stats.update(segments=len(spans), samples=rec.count, wall_s=time.perf_counter() - started,
+                 method=method)
+    return SimulationResult(scene, "reference", status, message, trajectory, spans, impacts, stats)
