@@ -167,3 +167,11 @@ def test_single_bar_agrees_with_its_own_one_degree_of_freedom_equation():
         assert s["t_contact"] == pytest.approx(t_contact, rel=1e-7), engine
         assert s["u_final"][0] == pytest.approx(u_f, rel=1e-7), engine
         assert s["q_final"][0] == pytest.approx(q_f, rel=1e-10), engine
+
+
+def test_random_scenes_always_approach_the_surface():
+    rng = np.random.default_rng(5)
+    for i in range(300):  # one link near -90 deg once made this loop forever
+        scene = crosscheck.random_scene(rng, int(rng.integers(1, 7)), f"r{i}", 1e-9)
+        L, q, u = np.array(scene.chain.length), np.array(scene.q0), np.array(scene.u0)
+        assert np.sum(L * u * np.cos(q)) < -0.02
