@@ -5,6 +5,7 @@ the repository's scenes, steel chains and random scenes, compared quantity by qu
 """
 from __future__ import annotations
 
+import importlib.resources
 import math
 import sys
 from dataclasses import dataclass
@@ -18,7 +19,6 @@ from .scene import Scene, scene_from_dict, load_scene, steel_chain_scene
 
 QUANTITIES = ("u_final", "q_final", "delta_max", "delta_r", "delta_T", "t_contact", "switch_times",
               "trajectory_q")
-SCENES_DIR = Path(__file__).resolve().parents[2] / "scenes"
 
 
 # ----------------------------------------------------------------------------- scenes
@@ -67,7 +67,9 @@ def with_tolerance(scene: Scene, rtol: float) -> Scene:
 
 def standard_scenes(links: Iterable[int], rtol: float) -> list[Scene]:
     """The repository's scenes and the paper's steel chain with each number of links."""
-    scenes = [with_tolerance(load_scene(p), rtol) for p in sorted(SCENES_DIR.glob("*.toml"))]
+    shipped = importlib.resources.files("impactgen.scenes")
+    files = sorted((p for p in shipped.iterdir() if p.name.endswith(".toml")), key=lambda p: p.name)
+    scenes = [with_tolerance(load_scene(Path(str(p))), rtol) for p in files]
     return scenes + [with_tolerance(steel_chain_scene(n), rtol) for n in links]
 
 

@@ -1,0 +1,1 @@
+"""Scene files shipped with impactgen (installed as package data)."""
