@@ -67,3 +67,33 @@ def test_solver_failure_exits_4():
     assert res.returncode == 4
     assert "max_steps" in res.stderr and "elastic" in res.stderr
     assert "Traceback" not in res.stderr
+
+
+def test_compiler_failure_exits_3_with_the_compiler_error(tmp_path):
+    env = {**__import__("os").environ, "IMPACTGEN_CACHE_DIR": str(tmp_path),
+           "CFLAGS": "-include /nonexistent/impactgen-missing.h"}
+    res = subprocess.run([sys.executable, "-m", "impactgen.cli", "--links", "1", "--out", str(tmp_path / "o")],
+                         capture_output=True, text=True, timeout=600, env=env)
+    assert res.returncode == 3
+    assert "impactgen-missing.h" in res.stderr and "Traceback" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_unwritable_cache_exits_3():
+    env = {**__import__("os").environ, "IMPACTGEN_CACHE_DIR": "/proc/impactgen-cache"}
+    res = subprocess.run([sys.executable, "-m", "impactgen.cli", "run", str(PAPER)],
+                         capture_output=True, text=True, timeout=600, env=env)
+    assert res.returncode == 3 and "IMPACTGEN_CACHE_DIR" in res.stderr
+
+
+@pytest.mark.parametrize("prefix", ["x; int evil", "../x", "model\n#include", "1abc", "é"])
+def test_c_prefix_must_be_an_identifier(prefix, tmp_path):
+    res = impactgen("--links", "1", "--prefix", prefix, "--out", str(tmp_path))
+    assert res.returncode == 2 and "--prefix" in res.stderr
+    assert not any(tmp_path.iterdir())
+
+
+def test_no_arguments_is_one_line_pointing_at_help():
+    res = impactgen()
+    assert res.returncode == 2 and "--help" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1

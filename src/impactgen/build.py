@@ -35,6 +35,8 @@ from .errors import BuildError
 from .sundials import Sundials, find_sundials
 
 COMPILE_ARGS = ("-O2",)
+SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
+                 "-fno-sanitize-recover=undefined")
 GLUE_FILES = ("cvode_glue.c", "cvode_glue.h")
 MANIFEST = "manifest.json"
 
@@ -85,12 +87,21 @@ def _generator_fingerprint() -> str:
     return h.hexdigest()
 
 
+def build_flags() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Compile and link flags: optimized, or instrumented with AddressSanitizer and
+    UndefinedBehaviorSanitizer when IMPACTGEN_SANITIZE is set (see scripts/sanitize.sh)."""
+    if os.environ.get("IMPACTGEN_SANITIZE"):
+        return SANITIZE_ARGS, ("-fsanitize=address,undefined",)
+    return COMPILE_ARGS, ()
+
+
 def build_key(spec: ModelSpec, sundials: Sundials) -> str:
     parts = {
         "spec": spec.to_json(),
         "generator": _generator_fingerprint(),
         "glue": [hashlib.sha256(_native(f).encode()).hexdigest() for f in GLUE_FILES],
-        "flags": COMPILE_ARGS,
+        "flags": build_flags(),
+        "compiler": [os.environ.get(v, "") for v in ("CC", "CFLAGS", "LDFLAGS", "LDSHARED")],
         "sundials": [sundials.version, sundials.include_dir, sundials.library_dir, sundials.libraries],
         "python": [sys.implementation.cache_tag, sysconfig.get_config_var("EXT_SUFFIX"),
                    sysconfig.get_platform()],
@@ -154,7 +165,8 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
         library_dirs=lib_dirs,
         runtime_library_dirs=lib_dirs,
         libraries=list(sundials.libraries) + ["m"],
-        extra_compile_args=list(COMPILE_ARGS),
+        extra_compile_args=list(build_flags()[0]),
+        extra_link_args=list(build_flags()[1]),
     )
     with _captured_fds() as log:
         try:
@@ -224,16 +236,17 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
         return entry
 
 
-_loaded: dict[tuple[ModelSpec, str], CompiledModel] = {}  # (spec, cache root) -> model
+_loaded: dict[tuple[ModelSpec, str], CompiledModel] = {}  # (spec, cache root + flags) -> model
 _loaded_lock = threading.Lock()
 
 
 def compile_model(spec: ModelSpec) -> CompiledModel:
     """Return the compiled model for `spec`, building it on first use (once per process)."""
     root = cache_root()
+    where = f"{root}|{build_flags()}"
     with _loaded_lock:
-        if (spec, str(root)) in _loaded:
-            return _loaded[(spec, str(root))]
+        if (spec, where) in _loaded:
+            return _loaded[(spec, where)]
         sundials = find_sundials()
         key = build_key(spec, sundials)
         try:
@@ -257,7 +270,7 @@ def compile_model(spec: ModelSpec) -> CompiledModel:
             param_names=tuple(manifest["param_names"]),
             phases=tuple(manifest["phases"]),
         )
-        _loaded[(spec, str(root))] = compiled
+        _loaded[(spec, where)] = compiled
         return compiled
 
 

@@ -86,18 +86,21 @@ def main(argv: Sequence[str] | None = None) -> int:
             from .scene import steel_chain_scene
             return _generate(steel_chain_scene(args.links),
                              args.out or Path("generated") / f"chain{args.links}", args.prefix)
-        _parser().print_help(sys.stderr)
-        return 2
+        raise SceneError(None, "nothing to do: give a command (run, generate, crosscheck) or "
+                               "--links N; see 'impactgen --help'")
     except ImpactgenError as exc:
         if debug:
             raise
-        print(f"impactgen: error: {exc}", file=sys.stderr)
+        message = " ".join(str(exc).split("\n"))  # one line, whatever a message holds
+        print(f"impactgen: error: {message}", file=sys.stderr)
         if wants_json:
-            print(json.dumps({"status": "error", "exit_code": exc.exit_code, "message": str(exc)}))
+            print(json.dumps({"status": "error", "exit_code": exc.exit_code, "message": message}))
         return exc.exit_code
     except KeyboardInterrupt:
         print("impactgen: interrupted", file=sys.stderr)
         return 130
+    except SystemExit as exc:  # --help
+        return exc.code if isinstance(exc.code, int) else 0
 
 
 def _overrides(items: list[str]) -> dict:

@@ -20,7 +20,8 @@ class SceneError(ImpactgenError, ValueError):
 
     def __init__(self, key: str | None, message: str):
         self.key = key
-        super().__init__(f"{key}: {message}" if key else message)
+        shown = key if key is None or key.isprintable() else repr(key)  # keys come from users
+        super().__init__(f"{shown}: {message}" if key else message)
 
 
 class BuildError(ImpactgenError, RuntimeError):

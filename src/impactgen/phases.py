@@ -27,6 +27,7 @@ from .scene import Scene
 
 RISING, FALLING = 1, -1
 FIRST_BUFFER = 2048  # samples; doubled while a segment keeps filling it
+MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 
 
 @dataclass(frozen=True)
@@ -183,6 +184,9 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     status, message = "ok", ""
 
     while True:
+        if len(spans) >= MAX_SEGMENTS:
+            raise SolverError(f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); "
+                              "shorten solver.t_end", phase, t)
         rule = rules[phase]
         params.phase = law_code[rule.law]
         seg_t, seg_y, fired = session.segment(params, phase, t, y, t_end, rule.events)

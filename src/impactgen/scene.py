@@ -156,7 +156,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "atol": Key("float", 1e-12, _tolerance),
         "t_end": Key("t_end", "separation", doc='"separation" or a time in s'),
         "t_max": Key("float", 10.0, _positive, doc="s; longest wait for a first contact"),
-        "max_steps": Key("int", 500_000, lambda v: None if v > 0 else "must be > 0"),
+        "max_steps": Key("int", 500_000, lambda v: None if 0 < v <= 10**9 else "must lie in [1, 1e9]"),
     },
 }
 
@@ -329,12 +329,16 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     scene = Scene(name, chain, rod, get("rod", "tip_radius"), surface,
                   get("surface", "height"), contact, q0, get("initial", "u", n), solver,
                   source=source)
-    _check_start(scene)
+    _check_physics(scene)
     return scene
 
 
-def _check_start(scene: Scene) -> None:
-    """The tip may touch the surface at the start but not be inside it."""
+def _check_physics(scene: Scene) -> None:
+    """Checks across keys: yield below modulus; the tip may touch the surface, not be in it."""
+    for section, mat in (("rod", scene.rod), ("surface", scene.surface)):
+        if mat.yield_strength >= mat.E:
+            raise SceneError(f"{section}.yield_strength", f"must be below {section}.E (a yield "
+                             f"strain S_y/E = {mat.yield_strength / mat.E:.3g} >= 1 is not physical)")
     if scene.surface_height is None:
         return
     y_tip = sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Memory safety of the C: build the model and the CVODE glue with AddressSanitizer and
+# UndefinedBehaviorSanitizer, then
+#   1. run the glue driver (tests/c/glue_driver.c: every path, errors included) with
+#      LeakSanitizer on: any leak, overflow or undefined behaviour fails;
+#   2. run the simulation tests with the instrumented cffi extension loaded into Python.
+# Usage: scripts/sanitize.sh [pytest arguments]   (run after 'make setup')
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-.venv/bin/python}
+[ -x "$PY" ] || PY=python3
+CC=${CC:-cc}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+echo "sanitize: 1/2 glue driver under ASan + UBSan + LeakSanitizer"
+"$PY" - "$work" <<'PY'
+import sys
+from pathlib import Path
+from impactgen.build import _native
+from impactgen.codegen.emit import generate_model
+from impactgen.codegen.expressions import ModelSpec
+work = Path(sys.argv[1])
+gen = generate_model(ModelSpec(2))
+(work / "model.h").write_text(gen.header)
+(work / "model.c").write_text(gen.source)
+for name in ("cvode_glue.c", "cvode_glue.h"):
+    (work / name).write_text(_native(name))
+PY
+inc=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); print(s.include_dir)')
+libdir=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); print(s.library_dir or "")')
+libs=$("$PY" -c 'from impactgen.sundials import find_sundials as f; print(" ".join("-l" + l for l in f().libraries))')
+"$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
+    -fno-sanitize-recover=undefined -I"$work" -I"$inc" "$work/model.c" "$work/cvode_glue.c" \
+    tests/c/glue_driver.c ${libdir:+-L"$libdir" -Wl,-rpath,"$libdir"} $libs -lm -o "$work/driver"
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/driver"
+
+echo "sanitize: 2/2 simulation tests with the instrumented extension"
+asan=$("$CC" -print-file-name=libasan.so)
+export IMPACTGEN_SANITIZE=1 IMPACTGEN_CACHE_DIR="$work/cache"
+# CPython itself keeps memory until exit: leaks are checked by the driver above, not here.
+export ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+LD_PRELOAD="$asan" "$PY" -m pytest -q -p no:cacheprovider \
+    tests/test_paper.py tests/test_phases.py tests/test_energy.py tests/test_memory.py "$@"
+echo "sanitize: clean"
