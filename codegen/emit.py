@@ -51,6 +51,7 @@ class ModelCPrinter(C99CodePrinter):
 
 
 _printer = ModelCPrinter()
+CSE_OPTIMIZATIONS = None  # sympy's "basic" pre-pass costs more time than it saves operations
 
 
 def ccode(expr: sm.Expr) -> str:
@@ -68,7 +69,7 @@ class CBlock:
 def c_block(named: list[tuple[str, sm.Expr]], tmp: str) -> CBlock:
     """CSE over `named` expressions; temporaries are called tmp0, tmp1, ..."""
     exprs = [sm.sympify(e) for _, e in named]
-    replacements, reduced = sm.cse(exprs, symbols=sm.numbered_symbols(tmp), optimizations="basic")
+    replacements, reduced = sm.cse(exprs, symbols=sm.numbered_symbols(tmp), optimizations=CSE_OPTIMIZATIONS)
     return CBlock(tuple((str(s), ccode(e)) for s, e in replacements),
                   tuple((name, ccode(e)) for (name, _), e in zip(named, reduced)))
 
@@ -161,11 +162,28 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
     out_blocks = [out_tip, energies] + ([friction] if friction else [])
 
     force_cases = []
+    slopes = dict(model.jacobian.force_slopes) if model.jacobian else {}
     for case in model.force_cases:
         block = CBlock((), tuple((str(name), ccode(e)) for name, e in case.steps))
         active = ccode(case.active)
-        force_cases.append({"phase": case.phase.upper(), "doc": case.doc, "active": active,
-                            "kernel": _kernel(model, [block], [active])})
+        entry = {"phase": case.phase.upper(), "doc": case.doc, "active": active,
+                 "kernel": _kernel(model, [block], [active])}
+        if case.phase in slopes:
+            slope = c_block([("dF", slopes[case.phase])], "s")
+            entry["slope_kernel"] = _kernel(model, [slope], [active])
+        force_cases.append(entry)
+
+    jac = None
+    if model.jacobian is not None:
+        J = model.jacobian
+        entries = [(f"G[{i * 2 * n + j}]", t(J.G[i, j])) for i in range(n) for j in range(2 * n)]
+        entries += [(f"Jw[{k * 2 * n + j}]", t(J.works[k, j])) for k in range(J.works.rows) for j in range(2 * n)]
+        jac_block = c_block(entries, "jac")
+        jac_blocks = [rhs_tip, kane, jac_block] + ([friction] if friction else [])
+        text = [c for _, c in jac_block.temps + jac_block.results]
+        udot_used = [i for i in range(n) if any(_mentions(c, f"udot{i + 1}") for c in text)]
+        jac = {"block": jac_block, "kernel": _kernel(model, jac_blocks), "nworks": J.works.rows,
+               "udot": udot_used}
 
     return {
         "prefix": prefix,
@@ -189,6 +207,7 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
         "out_tip": out_tip,
         "energies": energies,
         "force_cases": force_cases,
+        "jac": jac,
     }
 
 

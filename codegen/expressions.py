@@ -35,6 +35,7 @@ class ModelSpec:
     links: int
     contact_model: str = "three-phase"  # "three-phase" | "hertz"
     friction: str = "regularized"  # "none" | "regularized"
+    jacobian: bool = False  # emit the analytic Jacobian (for BDF)
 
     def __post_init__(self) -> None:
         if self.links < 1:
@@ -55,7 +56,7 @@ class ModelSpec:
     @property
     def slug(self) -> str:
         """A short readable name, e.g. 'chain2-three-phase-regularized'."""
-        return f"chain{self.links}-{self.contact_model}-{self.friction}"
+        return f"chain{self.links}-{self.contact_model}-{self.friction}" + ("-jacobian" if self.jacobian else "")
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)
@@ -94,6 +95,17 @@ class Named:
 
 
 @dataclass(frozen=True)
+class JacobianExpressions:
+    """d(ydot)/dy by the chain rule through the contact force. In terms of the tip
+    quantities, F, F_f, the slope dF = dF/d(delta) of the active law and the accelerations
+    udot_k (solved first); G is n x 2n, the acceleration rows are M^-1 G."""
+
+    force_slopes: tuple[tuple[str, sm.Expr], ...]  # (phase, dF/d(delta))
+    G: sm.Matrix  # df/dy - (dM/dy) udot, total derivatives
+    works: sm.Matrix  # rows of the work states, one per work, 2n columns
+
+
+@dataclass(frozen=True)
 class ModelExpressions:
     """Everything the templates print, in sympy form, already pruned to the spec."""
 
@@ -107,6 +119,7 @@ class ModelExpressions:
     outputs: tuple[Named, ...]
     works: tuple[Named, ...]  # power of each contact force: integrated as extra states
     params: tuple[tuple[str, str], ...]  # (name, doc) of every runtime parameter
+    jacobian: JacobianExpressions | None = None
 
     @property
     def phases(self) -> tuple[str, ...]:
@@ -203,5 +216,39 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     params += tuple((k, PARAM_DOCS[k]) for k in order if k in names)
 
     forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
+    jacobian = _jacobian(chain, forcing, tuple(cases), friction, tuple(works)) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction, tuple(events),
-                            tuple(outputs), tuple(works), params)
+                            tuple(outputs), tuple(works), params, jacobian)
+
+
+def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase, ...],
+              friction: sm.Expr | None, works: tuple[Named, ...]) -> JacobianExpressions:
+    s = chain.symbols
+    n = chain.n
+    y = list(s.q) + list(s.u)
+    udot = sm.symbols(f"udot1:{n + 1}")
+    dF = sm.Symbol("dF")  # slope of the active normal-force law
+    _, y_B = chain.tip_position
+    v_Bx, v_By = chain.tip_velocity
+    d_delta = [-y_B.diff(v) for v in y]
+    dF_dy = [dF * d for d in d_delta]
+    if friction is not None:
+        dFf_dF, dFf_dv = friction.diff(s.F), friction.diff(TIP["v_Bx"])
+        dFf_dy = [dFf_dF * a + dFf_dv * v_Bx.diff(v) for a, v in zip(dF_dy, y)]
+    else:
+        dFf_dy = [0] * len(y)
+    M = chain.mass_matrix
+    G = sm.zeros(n, 2 * n)
+    for i in range(n):
+        df_dF, df_dFf = forcing[i].diff(s.F), forcing[i].diff(s.F_f)
+        for j, v in enumerate(y):
+            dM_udot = sum(M[i, k].diff(v) * udot[k] for k in range(n)) if j < n else 0
+            G[i, j] = forcing[i].diff(v) + df_dF * dF_dy[j] + df_dFf * dFf_dy[j] - dM_udot
+    rows = []
+    for w in works:  # power of each contact force: F v_By, F_f v_Bx
+        if w.name == "normal":
+            rows.append([a * TIP["v_By"] + s.F * v_By.diff(v) for a, v in zip(dF_dy, y)])
+        else:
+            rows.append([a * TIP["v_Bx"] + s.F_f * v_Bx.diff(v) for a, v in zip(dFf_dy, y)])
+    slopes = tuple((c.phase, sm.diff(c.expr, law.delta)) for c in cases)
+    return JacobianExpressions(slopes, G, sm.Matrix(rows))

@@ -11,6 +11,7 @@ solved numerically in the generated C, never inverted symbolically.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import sympy as sm
 import sympy.physics.mechanics as me
@@ -56,6 +57,7 @@ class ChainEquations:
     potential_energy: sm.Expr  # V
 
 
+@lru_cache(maxsize=8)
 def derive_chain(n: int) -> ChainEquations:
     """Derive the n-link chain with sympy.physics.mechanics.KanesMethod."""
     if n < 1:

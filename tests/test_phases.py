@@ -39,9 +39,10 @@ def test_hertz_model_is_elastic_with_no_permanent_deformation():
     assert [p.phase for p in result.phases] == ["elastic", "restitution"]
     assert s["delta_r"] == 0.0
     assert s["R_res"] == pytest.approx(scene.tip_radius)
-    # no dissipation at all: the normal force gives back all it took
-    assert abs(s["energy"]["W_normal"]) < 1e-9 * s["T0"]
-    assert s["delta_T"] == pytest.approx(-s["energy"]["W_gravity"], abs=1e-9)
+    # no dissipation: the normal force gives back all it took, to the integration tolerance
+    # (the three-phase model loses 2e-3 J here)
+    assert abs(s["energy"]["W_normal"]) < 1e-6 * s["T0"]
+    assert s["delta_T"] == pytest.approx(-s["energy"]["W_gravity"], abs=1e-6 * s["T0"])
 
 
 def test_slow_impact_goes_straight_from_elastic_to_restitution():

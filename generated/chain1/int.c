@@ -8,9 +8,9 @@
 
 #include "int.h"
 
-/* Solve M x = b in place for symmetric positive definite M (lower triangle filled) by
- * Cholesky factorization. Returns nonzero if M is not positive definite. */
-static int solve_spd(double *M, double *b)
+/* Cholesky factorization in place of a symmetric positive definite M (lower triangle
+ * filled): M = L L^T. Returns nonzero if M is not positive definite. */
+static int cholesky_factor(double *M)
 {
     const int n = INT_NQ;
     for (int j = 0; j < n; ++j) {
@@ -25,17 +25,23 @@ static int solve_spd(double *M, double *b)
             M[i * n + j] = s / d;
         }
     }
+    return 0;
+}
+
+/* Solve L L^T x = b in place, with the factor from cholesky_factor. */
+static void cholesky_solve(const double *L, double *b)
+{
+    const int n = INT_NQ;
     for (int i = 0; i < n; ++i) {
         double s = b[i];
-        for (int k = 0; k < i; ++k) s -= M[i * n + k] * b[k];
-        b[i] = s / M[i * n + i];
+        for (int k = 0; k < i; ++k) s -= L[i * n + k] * b[k];
+        b[i] = s / L[i * n + i];
     }
     for (int i = n - 1; i >= 0; --i) {
         double s = b[i];
-        for (int k = i + 1; k < n; ++k) s -= M[k * n + i] * b[k];
-        b[i] = s / M[i * n + i];
+        for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * b[k];
+        b[i] = s / L[i * n + i];
     }
-    return 0;
 }
 
 double int_normal_force(double delta, const int_params *p)
@@ -80,6 +86,54 @@ double int_normal_force(double delta, const int_params *p)
     }
 }
 
+/* dF/d(delta) of the active normal-force law, for the Jacobian. */
+static double normal_force_slope(double delta, const int_params *p)
+{
+    switch (p->phase) {
+    case INT_PHASE_ELASTIC: {
+        const double E_star = p->E_star;
+        const double R = p->R;
+
+        if (!(delta > 0)) return 0.0;
+        const double dF = 2*E_star*sqrt(R)*sqrt(delta);
+
+        return dF;
+    }
+    case INT_PHASE_ELASTOPLASTIC: {
+        const double R = p->R;
+        const double delta_c = p->delta_c;
+        const double P_c = p->P_c;
+        const double C_j = p->C_j;
+        const double B = p->B;
+
+        if (!(delta > 0)) return 0.0;
+        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)/pow(delta_c, 5.0/12.0));
+        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)/pow(delta_c, 5.0/9.0));
+        const double s2 = (1.0/C_j);
+        const double s3 = pow((10.0/19.0)*delta/delta_c, B);
+        const double s4 = 3.14159265358979323846*sqrt(delta*s3)/sqrt(R);
+        const double s5 = s2*(0.92*cos(s4) + 1.92);
+        const double s6 = pow(delta, 0.10000000000000009)*pow(delta_c, -1.1)*(1 - s1);
+        const double s7 = (1.0/2.0)*s3;
+        const double dF = P_c*(-0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) + (3.0/2.0)*sqrt(delta)*s0/(delta_c*sqrt(delta_c)) + (10.0/351.0)*pow(delta, 0.6555555555555557)*pow(delta_c, -1.6555555555555557)*s1*s5 - 3.68*s2*s4*s6*(B*s7 + s7)*sin(s4)/s3 + 4.4*s5*s6);
+
+        return dF;
+    }
+    case INT_PHASE_RESTITUTION: {
+        const double E_star = p->E_star;
+        const double delta_r = p->delta_r;
+        const double R_res = p->R_res;
+
+        if (!(delta > delta_r)) return 0.0;
+        const double dF = 2*E_star*sqrt(R_res)*sqrt(delta - delta_r);
+
+        return dF;
+    }
+    default:
+        return 0.0;
+    }
+}
+
 int int_rhs(double t, const double *y, double *ydot, const int_params *p)
 {
     (void)t;
@@ -108,9 +162,10 @@ int int_rhs(double t, const double *y, double *ydot, const int_params *p)
     double M[1];
     double f[1];
     M[0] = (1.0/3.0)*(L1*L1)*m1;
-    f[0] = L1*(F*cos_q1 - F_f*sin_q1 - 1.0/2.0*cos_q1*g*m1);
+    f[0] = -1.0/2.0*L1*cos_q1*g*m1 + L1*(F*cos_q1 - F_f*sin_q1);
 
-    if (solve_spd(M, f)) return -1;
+    if (cholesky_factor(M)) return -1;
+    cholesky_solve(M, f);
     ydot[0] = y[1];
     ydot[1] = f[0];
     ydot[2] = F*v_By;  /* power of the normal force, W */
@@ -187,4 +242,72 @@ void int_outputs(double t, const double *y, double *out, const int_params *p)
     out[INT_OUT_T1] = T1;
     out[INT_OUT_T] = T;
     out[INT_OUT_V] = V;
+}
+
+int int_jacobian(double t, const double *y, double *J, const int_params *p)
+{
+    (void)t;
+    const double q1 = y[0];
+    const double u1 = y[1];
+    const double L1 = p->L1;
+    const double m1 = p->m1;
+    const double g = p->g;
+    const double y_s = p->y_s;
+    const double mu = p->mu;
+    const double eps = p->eps;
+    const double sin_q1 = sin(q1);
+    const double cos_q1 = cos(q1);
+
+    const double tip0 = L1*sin_q1;
+    const double delta = -tip0 + y_s;
+    const double v_Bx = -tip0*u1;
+    const double v_By = L1*cos_q1*u1;
+
+    const double F = int_normal_force(delta, p);
+    const double dF = normal_force_slope(delta, p);
+    const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+
+    double M[1];
+    double f[1];
+    M[0] = (1.0/3.0)*(L1*L1)*m1;
+    f[0] = -1.0/2.0*L1*cos_q1*g*m1 + L1*(F*cos_q1 - F_f*sin_q1);
+
+    if (cholesky_factor(M)) return -1;
+    cholesky_solve(M, f);
+    /* G = df/dy - (dM/dy) du/dt (total derivatives through F and F_f); Jw: the works */
+    double G[2];
+    double Jw[4];
+    const double jac0 = (L1*L1);
+    const double jac1 = F*sin_q1;
+    const double jac2 = F_f*cos_q1;
+    const double jac3 = (v_Bx*v_Bx);
+    const double jac4 = (eps*eps) + jac3;
+    const double jac5 = (1.0/sqrt(jac4));
+    const double jac6 = L1*cos_q1;
+    const double jac7 = dF*jac6;
+    const double jac8 = F*mu;
+    const double jac9 = jac3*jac8/(jac4*sqrt(jac4)) - jac5*jac8;
+    const double jac10 = jac5*jac7*mu*v_Bx - jac6*jac9*u1;
+    const double jac11 = L1*sin_q1;
+    const double jac12 = L1*u1;
+    G[0] = (1.0/2.0)*L1*g*m1*sin_q1 + L1*(-jac1 - jac2) - (cos_q1*cos_q1)*dF*jac0 - jac10*jac11;
+    G[1] = jac0*jac9*(sin_q1*sin_q1);
+    Jw[0] = -jac1*jac12 - jac7*v_By;
+    Jw[1] = F*jac6;
+    Jw[2] = jac10*v_Bx - jac12*jac2;
+    Jw[3] = -F_f*jac11 - jac11*jac9*v_Bx;
+
+    for (int k = 0; k < INT_NSTATE * INT_NSTATE; ++k) J[k] = 0.0;
+    for (int j = 0; j < 2; ++j) {
+        double column[1];
+        for (int i = 0; i < 1; ++i) column[i] = G[i * 2 + j];
+        cholesky_solve(M, column);
+        for (int i = 0; i < 1; ++i) J[(1 + i) * INT_NSTATE + j] = column[i];
+        for (int k = 0; k < 2; ++k) J[(2 + k) * INT_NSTATE + j] = Jw[k * 2 + j];
+    }
+    for (int i = 0; i < 1; ++i) J[i * INT_NSTATE + 1 + i] = 1.0;  /* dq/dt = u */
+    for (int k = 0; k < INT_NSTATE * INT_NSTATE; ++k) {
+        if (!isfinite(J[k])) return 1;
+    }
+    return 0;
 }

@@ -17,6 +17,7 @@ extern "C" {
 #define INT_NSTATE 4
 #define INT_NEVENT 5
 #define INT_NOUT 11
+#define INT_HAS_JACOBIAN 1
 
 /* Contact phases (MODEL section 4); params.phase selects the normal-force law. */
 enum {
@@ -75,6 +76,8 @@ int int_rhs(double t, const double *y, double *ydot, const int_params *p);
 double int_normal_force(double delta, const int_params *p);
 void int_events(double t, const double *y, double *ev, const int_params *p);
 void int_outputs(double t, const double *y, double *out, const int_params *p);
+/* J[i * NSTATE + j] = d ydot_i / d y_j (row-major); returns as int_rhs does. */
+int int_jacobian(double t, const double *y, double *J, const int_params *p);
 
 #ifdef __cplusplus
 }

@@ -8,9 +8,9 @@
 
 #include "model.h"
 
-/* Solve M x = b in place for symmetric positive definite M (lower triangle filled) by
- * Cholesky factorization. Returns nonzero if M is not positive definite. */
-static int solve_spd(double *M, double *b)
+/* Cholesky factorization in place of a symmetric positive definite M (lower triangle
+ * filled): M = L L^T. Returns nonzero if M is not positive definite. */
+static int cholesky_factor(double *M)
 {
     const int n = MODEL_NQ;
     for (int j = 0; j < n; ++j) {
@@ -25,17 +25,23 @@ static int solve_spd(double *M, double *b)
             M[i * n + j] = s / d;
         }
     }
+    return 0;
+}
+
+/* Solve L L^T x = b in place, with the factor from cholesky_factor. */
+static void cholesky_solve(const double *L, double *b)
+{
+    const int n = MODEL_NQ;
     for (int i = 0; i < n; ++i) {
         double s = b[i];
-        for (int k = 0; k < i; ++k) s -= M[i * n + k] * b[k];
-        b[i] = s / M[i * n + i];
+        for (int k = 0; k < i; ++k) s -= L[i * n + k] * b[k];
+        b[i] = s / L[i * n + i];
     }
     for (int i = n - 1; i >= 0; --i) {
         double s = b[i];
-        for (int k = i + 1; k < n; ++k) s -= M[k * n + i] * b[k];
-        b[i] = s / M[i * n + i];
+        for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * b[k];
+        b[i] = s / L[i * n + i];
     }
-    return 0;
 }
 
 double model_normal_force(double delta, const model_params *p)
@@ -76,6 +82,54 @@ double model_normal_force(double delta, const model_params *p)
         return F;
     }
     default:  /* free flight */
+        return 0.0;
+    }
+}
+
+/* dF/d(delta) of the active normal-force law, for the Jacobian. */
+static double normal_force_slope(double delta, const model_params *p)
+{
+    switch (p->phase) {
+    case MODEL_PHASE_ELASTIC: {
+        const double E_star = p->E_star;
+        const double R = p->R;
+
+        if (!(delta > 0)) return 0.0;
+        const double dF = 2*E_star*sqrt(R)*sqrt(delta);
+
+        return dF;
+    }
+    case MODEL_PHASE_ELASTOPLASTIC: {
+        const double R = p->R;
+        const double delta_c = p->delta_c;
+        const double P_c = p->P_c;
+        const double C_j = p->C_j;
+        const double B = p->B;
+
+        if (!(delta > 0)) return 0.0;
+        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)/pow(delta_c, 5.0/12.0));
+        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)/pow(delta_c, 5.0/9.0));
+        const double s2 = (1.0/C_j);
+        const double s3 = pow((10.0/19.0)*delta/delta_c, B);
+        const double s4 = 3.14159265358979323846*sqrt(delta*s3)/sqrt(R);
+        const double s5 = s2*(0.92*cos(s4) + 1.92);
+        const double s6 = pow(delta, 0.10000000000000009)*pow(delta_c, -1.1)*(1 - s1);
+        const double s7 = (1.0/2.0)*s3;
+        const double dF = P_c*(-0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) + (3.0/2.0)*sqrt(delta)*s0/(delta_c*sqrt(delta_c)) + (10.0/351.0)*pow(delta, 0.6555555555555557)*pow(delta_c, -1.6555555555555557)*s1*s5 - 3.68*s2*s4*s6*(B*s7 + s7)*sin(s4)/s3 + 4.4*s5*s6);
+
+        return dF;
+    }
+    case MODEL_PHASE_RESTITUTION: {
+        const double E_star = p->E_star;
+        const double delta_r = p->delta_r;
+        const double R_res = p->R_res;
+
+        if (!(delta > delta_r)) return 0.0;
+        const double dF = 2*E_star*sqrt(R_res)*sqrt(delta - delta_r);
+
+        return dF;
+    }
+    default:
         return 0.0;
     }
 }
@@ -121,30 +175,40 @@ int model_rhs(double t, const double *y, double *ydot, const model_params *p)
     /* Kane's equations M du/dt = f (lower triangle of M) */
     double M[9];
     double f[3];
-    const double kin0 = (1.0/2.0)*m2;
-    const double kin1 = (1.0/2.0)*m3;
-    const double kin2 = L3*kin1;
-    const double kin3 = cos_q1*g;
-    const double kin4 = cos_q1*sin_q2 - cos_q2*sin_q1;
-    const double kin5 = kin4*m3;
-    const double kin6 = L2*(u2*u2);
-    const double kin7 = kin0*kin4;
-    const double kin8 = cos_q1*sin_q3 - cos_q3*sin_q1;
-    const double kin9 = (u3*u3);
-    const double kin10 = cos_q2*g;
-    const double kin11 = L1*(u1*u1);
-    const double kin12 = cos_q2*sin_q3 - cos_q3*sin_q2;
-    M[0] = (L1*L1)*((1.0/3.0)*m1 + m2 + m3);
-    M[3] = L1*L2*(kin0 + m3)*(cos_q1*cos_q2 + sin_q1*sin_q2);
-    M[4] = (L2*L2)*((1.0/3.0)*m2 + m3);
-    M[6] = L1*kin2*(cos_q1*cos_q3 + sin_q1*sin_q3);
-    M[7] = L2*kin2*(cos_q2*cos_q3 + sin_q2*sin_q3);
+    const double kin0 = (L1*L1);
+    const double kin1 = L1*m3;
+    const double kin2 = L2*(cos_q1*cos_q2 + sin_q1*sin_q2);
+    const double kin3 = L1*m2;
+    const double kin4 = (1.0/2.0)*kin3;
+    const double kin5 = (L2*L2);
+    const double kin6 = (1.0/2.0)*L3;
+    const double kin7 = kin1*kin6;
+    const double kin8 = L2*m3;
+    const double kin9 = kin6*kin8;
+    const double kin10 = cos_q1*g;
+    const double kin11 = L2*kin1;
+    const double kin12 = (u2*u2);
+    const double kin13 = cos_q1*sin_q2 - cos_q2*sin_q1;
+    const double kin14 = kin12*kin13;
+    const double kin15 = L2*kin4;
+    const double kin16 = (u3*u3);
+    const double kin17 = cos_q1*sin_q3 - cos_q3*sin_q1;
+    const double kin18 = cos_q2*g;
+    const double kin19 = (u1*u1);
+    const double kin20 = -kin13*kin19;
+    const double kin21 = cos_q2*sin_q3 - cos_q3*sin_q2;
+    M[0] = (1.0/3.0)*kin0*m1 + kin0*m2 + kin0*m3;
+    M[3] = kin1*kin2 + kin2*kin4;
+    M[4] = (1.0/3.0)*kin5*m2 + kin5*m3;
+    M[6] = kin7*(cos_q1*cos_q3 + sin_q1*sin_q3);
+    M[7] = kin9*(cos_q2*cos_q3 + sin_q2*sin_q3);
     M[8] = (1.0/3.0)*(L3*L3)*m3;
-    f[0] = L1*(F*cos_q1 - F_f*sin_q1 + kin2*kin8*kin9 - 1.0/2.0*kin3*m1 - kin3*m2 - kin3*m3 + kin5*kin6 + kin6*kin7);
-    f[1] = L2*(F*cos_q2 - F_f*sin_q2 + (1.0/2.0)*L3*kin12*kin9*m3 - kin0*kin10 - kin10*m3 - kin11*kin5 - kin11*kin7);
-    f[2] = L3*(F*cos_q3 - F_f*sin_q3 - cos_q3*g*kin1 - kin1*kin11*kin8 - kin1*kin12*kin6);
+    f[0] = -1.0/2.0*L1*kin10*m1 + L1*(F*cos_q1 - F_f*sin_q1) - kin1*kin10 - kin10*kin3 + kin11*kin14 + kin14*kin15 + kin16*kin17*kin7;
+    f[1] = -1.0/2.0*L2*kin18*m2 + L2*(F*cos_q2 - F_f*sin_q2) + kin11*kin20 + kin15*kin20 + kin16*kin21*kin9 - kin18*kin8;
+    f[2] = L3*(F*cos_q3 - F_f*sin_q3) - cos_q3*g*kin6*m3 - kin12*kin21*kin9 - kin17*kin19*kin7;
 
-    if (solve_spd(M, f)) return -1;
+    if (cholesky_factor(M)) return -1;
+    cholesky_solve(M, f);
     ydot[0] = y[3];
     ydot[1] = y[4];
     ydot[2] = y[5];
@@ -237,27 +301,22 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
 
     const double en0 = (L1*L1)*(u1*u1);
-    const double en1 = 12*en0;
+    const double en1 = (1.0/6.0)*en0*m1;
     const double en2 = (L2*L2)*(u2*u2);
-    const double en3 = 4*en2;
-    const double en4 = L1*u1;
-    const double en5 = 12*en4;
-    const double en6 = L2*u2;
-    const double en7 = en6*(cos_q1*cos_q2 + sin_q1*sin_q2);
-    const double en8 = (L3*L3)*(u3*u3);
-    const double en9 = en4*en7;
-    const double en10 = L3*u3;
-    const double en11 = en10*(cos_q1*cos_q3 + sin_q1*sin_q3);
-    const double en12 = en10*en6*(cos_q2*cos_q3 + sin_q2*sin_q3);
-    const double en13 = 4*en0;
-    const double en14 = L1*sin_q1;
-    const double en15 = L2*sin_q2;
-    const double en16 = 2*en14;
-    const double T1 = (1.0/6.0)*en0*m1;
-    const double T2 = (1.0/24.0)*m2*(en1 + en3 + en5*en7);
-    const double T3 = (1.0/24.0)*m3*(en1 + en11*en5 + 12*en12 + 12*en2 + 4*en8 + 24*en9);
-    const double T = (1.0/24.0)*en13*m1 + (1.0/24.0)*en2*m2 + (1.0/24.0)*en8*m3 + (1.0/8.0)*m2*(en13 + en2 + 4*en9) + (1.0/8.0)*m3*(4*en11*en4 + 4*en12 + en13 + en3 + en8 + 8*en9);
-    const double V = (1.0/2.0)*g*(en14*m1 + m2*(en15 + en16) + m3*(L3*sin_q3 + 2*en15 + en16));
+    const double en3 = L1*u1;
+    const double en4 = L2*u2;
+    const double en5 = en3*en4*(cos_q1*cos_q2 + sin_q1*sin_q2);
+    const double en6 = (1.0/24.0)*en2*m2 + (1.0/2.0)*m2*(en0 + (1.0/4.0)*en2 + en5);
+    const double en7 = (L3*L3)*(u3*u3);
+    const double en8 = L3*u3;
+    const double en9 = (1.0/24.0)*en7*m3 + (1.0/2.0)*m3*(en0 + en2 + en3*en8*(cos_q1*cos_q3 + sin_q1*sin_q3) + en4*en8*(cos_q2*cos_q3 + sin_q2*sin_q3) + 2*en5 + (1.0/4.0)*en7);
+    const double en10 = L1*sin_q1;
+    const double en11 = L2*sin_q2;
+    const double T1 = en1;
+    const double T2 = en6;
+    const double T3 = en9;
+    const double T = en1 + en6 + en9;
+    const double V = (1.0/2.0)*en10*g*m1 + g*m2*(en10 + (1.0/2.0)*en11) + g*m3*((1.0/2.0)*L3*sin_q3 + en10 + en11);
 
     out[MODEL_OUT_x_B] = x_B;
     out[MODEL_OUT_y_B] = y_B;
@@ -272,4 +331,207 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     out[MODEL_OUT_T3] = T3;
     out[MODEL_OUT_T] = T;
     out[MODEL_OUT_V] = V;
+}
+
+int model_jacobian(double t, const double *y, double *J, const model_params *p)
+{
+    (void)t;
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double q3 = y[2];
+    const double u1 = y[3];
+    const double u2 = y[4];
+    const double u3 = y[5];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double L3 = p->L3;
+    const double m1 = p->m1;
+    const double m2 = p->m2;
+    const double m3 = p->m3;
+    const double g = p->g;
+    const double y_s = p->y_s;
+    const double mu = p->mu;
+    const double eps = p->eps;
+    const double sin_q1 = sin(q1);
+    const double cos_q1 = cos(q1);
+    const double sin_q2 = sin(q2);
+    const double cos_q2 = cos(q2);
+    const double sin_q3 = sin(q3);
+    const double cos_q3 = cos(q3);
+
+    const double tip0 = L1*sin_q1;
+    const double tip1 = L2*sin_q2;
+    const double tip2 = L3*sin_q3;
+    const double delta = -tip0 - tip1 - tip2 + y_s;
+    const double v_Bx = -tip0*u1 - tip1*u2 - tip2*u3;
+    const double v_By = L1*cos_q1*u1 + L2*cos_q2*u2 + L3*cos_q3*u3;
+
+    const double F = model_normal_force(delta, p);
+    const double dF = normal_force_slope(delta, p);
+    const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+
+    double M[9];
+    double f[3];
+    const double kin0 = (L1*L1);
+    const double kin1 = L1*m3;
+    const double kin2 = L2*(cos_q1*cos_q2 + sin_q1*sin_q2);
+    const double kin3 = L1*m2;
+    const double kin4 = (1.0/2.0)*kin3;
+    const double kin5 = (L2*L2);
+    const double kin6 = (1.0/2.0)*L3;
+    const double kin7 = kin1*kin6;
+    const double kin8 = L2*m3;
+    const double kin9 = kin6*kin8;
+    const double kin10 = cos_q1*g;
+    const double kin11 = L2*kin1;
+    const double kin12 = (u2*u2);
+    const double kin13 = cos_q1*sin_q2 - cos_q2*sin_q1;
+    const double kin14 = kin12*kin13;
+    const double kin15 = L2*kin4;
+    const double kin16 = (u3*u3);
+    const double kin17 = cos_q1*sin_q3 - cos_q3*sin_q1;
+    const double kin18 = cos_q2*g;
+    const double kin19 = (u1*u1);
+    const double kin20 = -kin13*kin19;
+    const double kin21 = cos_q2*sin_q3 - cos_q3*sin_q2;
+    M[0] = (1.0/3.0)*kin0*m1 + kin0*m2 + kin0*m3;
+    M[3] = kin1*kin2 + kin2*kin4;
+    M[4] = (1.0/3.0)*kin5*m2 + kin5*m3;
+    M[6] = kin7*(cos_q1*cos_q3 + sin_q1*sin_q3);
+    M[7] = kin9*(cos_q2*cos_q3 + sin_q2*sin_q3);
+    M[8] = (1.0/3.0)*(L3*L3)*m3;
+    f[0] = -1.0/2.0*L1*kin10*m1 + L1*(F*cos_q1 - F_f*sin_q1) - kin1*kin10 - kin10*kin3 + kin11*kin14 + kin14*kin15 + kin16*kin17*kin7;
+    f[1] = -1.0/2.0*L2*kin18*m2 + L2*(F*cos_q2 - F_f*sin_q2) + kin11*kin20 + kin15*kin20 + kin16*kin21*kin9 - kin18*kin8;
+    f[2] = L3*(F*cos_q3 - F_f*sin_q3) - cos_q3*g*kin6*m3 - kin12*kin21*kin9 - kin17*kin19*kin7;
+
+    if (cholesky_factor(M)) return -1;
+    cholesky_solve(M, f);
+    const double udot1 = f[0];
+    const double udot2 = f[1];
+    const double udot3 = f[2];
+    /* G = df/dy - (dM/dy) du/dt (total derivatives through F and F_f); Jw: the works */
+    double G[18];
+    double Jw[12];
+    const double jac0 = L1*sin_q1;
+    const double jac1 = g*jac0;
+    const double jac2 = (L1*L1);
+    const double jac3 = F*sin_q1;
+    const double jac4 = F_f*cos_q1;
+    const double jac5 = cos_q1*sin_q3 - cos_q3*sin_q1;
+    const double jac6 = L1*L3;
+    const double jac7 = (1.0/2.0)*m3;
+    const double jac8 = jac6*jac7;
+    const double jac9 = jac8*udot3;
+    const double jac10 = cos_q1*cos_q2;
+    const double jac11 = sin_q1*sin_q2;
+    const double jac12 = jac10 + jac11;
+    const double jac13 = -jac12;
+    const double jac14 = (u2*u2);
+    const double jac15 = L1*L2;
+    const double jac16 = jac15*m3;
+    const double jac17 = (1.0/2.0)*m2;
+    const double jac18 = jac15*jac17;
+    const double jac19 = cos_q1*cos_q3;
+    const double jac20 = sin_q1*sin_q3;
+    const double jac21 = jac19 + jac20;
+    const double jac22 = -jac21;
+    const double jac23 = (u3*u3);
+    const double jac24 = cos_q1*sin_q2 - cos_q2*sin_q1;
+    const double jac25 = jac16*jac24;
+    const double jac26 = jac18*jac24 + jac25;
+    const double jac27 = L1*cos_q1;
+    const double jac28 = (v_Bx*v_Bx);
+    const double jac29 = (eps*eps) + jac28;
+    const double jac30 = (1.0/sqrt(jac29));
+    const double jac31 = dF*jac30*mu*v_Bx;
+    const double jac32 = F*mu;
+    const double jac33 = jac28*jac32/(jac29*sqrt(jac29)) - jac30*jac32;
+    const double jac34 = jac27*jac31 - jac27*jac33*u1;
+    const double jac35 = dF*jac10*jac15;
+    const double jac36 = -jac24;
+    const double jac37 = jac16*jac36;
+    const double jac38 = jac18*jac36 + jac37;
+    const double jac39 = L2*cos_q2;
+    const double jac40 = jac31*jac39 - jac33*jac39*u2;
+    const double jac41 = dF*jac19*jac6;
+    const double jac42 = -jac5;
+    const double jac43 = L3*cos_q3;
+    const double jac44 = jac31*jac43 - jac33*jac43*u3;
+    const double jac45 = jac15*m2;
+    const double jac46 = jac11*jac15*jac33;
+    const double jac47 = L3*u3;
+    const double jac48 = jac47*m3;
+    const double jac49 = jac20*jac33*jac6;
+    const double jac50 = (u1*u1);
+    const double jac51 = L2*sin_q2;
+    const double jac52 = g*jac51;
+    const double jac53 = (L2*L2);
+    const double jac54 = F*sin_q2;
+    const double jac55 = F_f*cos_q2;
+    const double jac56 = cos_q2*sin_q3 - cos_q3*sin_q2;
+    const double jac57 = L2*L3;
+    const double jac58 = jac57*jac7;
+    const double jac59 = jac58*udot3;
+    const double jac60 = cos_q2*cos_q3;
+    const double jac61 = sin_q2*sin_q3;
+    const double jac62 = jac60 + jac61;
+    const double jac63 = -jac62;
+    const double jac64 = dF*jac57*jac60;
+    const double jac65 = -jac56;
+    const double jac66 = jac33*jac57*jac61;
+    const double jac67 = jac8*udot1;
+    const double jac68 = L3*sin_q3;
+    const double jac69 = jac58*udot2;
+    const double jac70 = (L3*L3);
+    const double jac71 = F*sin_q3;
+    const double jac72 = F_f*cos_q3;
+    const double jac73 = L1*u1;
+    const double jac74 = L3*m3;
+    const double jac75 = L2*u2;
+    const double jac76 = dF*v_By;
+    const double jac77 = jac33*v_Bx;
+    G[0] = L1*(-jac3 - jac4) - (cos_q1*cos_q1)*dF*jac2 - jac0*jac34 + (1.0/2.0)*jac1*m1 + jac1*m2 + jac1*m3 + jac13*jac14*jac16 + jac13*jac14*jac18 + jac22*jac23*jac8 - jac26*udot2 - jac5*jac9;
+    G[1] = (1.0/2.0)*L1*L2*jac12*jac14*m2 + L1*L2*jac12*jac14*m3 - jac0*jac40 - jac35 - jac38*udot2;
+    G[2] = (1.0/2.0)*L1*L3*jac21*jac23*m3 - jac0*jac44 - jac41 - jac42*jac9;
+    G[3] = jac2*jac33*(sin_q1*sin_q1);
+    G[4] = jac24*jac45*u2 + 2*jac25*u2 + jac46;
+    G[5] = L1*jac48*jac5 + jac49;
+    G[6] = (1.0/2.0)*L1*L2*jac12*jac50*m2 + L1*L2*jac12*jac50*m3 - jac26*udot1 - jac34*jac51 - jac35;
+    G[7] = L2*(-jac54 - jac55) - (cos_q2*cos_q2)*dF*jac53 + jac13*jac16*jac50 + jac13*jac18*jac50 + jac17*jac52 + jac23*jac58*jac63 - jac38*udot1 - jac40*jac51 + jac52*m3 - jac56*jac59;
+    G[8] = (1.0/2.0)*L2*L3*jac23*jac62*m3 - jac44*jac51 - jac59*jac65 - jac64;
+    G[9] = jac36*jac45*u1 + 2*jac37*u1 + jac46;
+    G[10] = jac33*jac53*(sin_q2*sin_q2);
+    G[11] = L2*jac48*jac56 + jac66;
+    G[12] = (1.0/2.0)*L1*L3*jac21*jac50*m3 - jac34*jac68 - jac41 - jac5*jac67;
+    G[13] = (1.0/2.0)*L2*L3*jac14*jac62*m3 - jac40*jac68 - jac56*jac69 - jac64;
+    G[14] = L3*(-jac71 - jac72) - (cos_q3*cos_q3)*dF*jac70 + g*jac68*jac7 + jac14*jac58*jac63 + jac22*jac50*jac8 - jac42*jac67 - jac44*jac68 - jac65*jac69;
+    G[15] = jac42*jac73*jac74 + jac49;
+    G[16] = jac65*jac74*jac75 + jac66;
+    G[17] = jac33*jac70*(sin_q3*sin_q3);
+    Jw[0] = -jac27*jac76 - jac3*jac73;
+    Jw[1] = -jac39*jac76 - jac54*jac75;
+    Jw[2] = -jac43*jac76 - jac47*jac71;
+    Jw[3] = F*jac27;
+    Jw[4] = F*jac39;
+    Jw[5] = F*jac43;
+    Jw[6] = jac34*v_Bx - jac4*jac73;
+    Jw[7] = jac40*v_Bx - jac55*jac75;
+    Jw[8] = jac44*v_Bx - jac47*jac72;
+    Jw[9] = -F_f*jac0 - jac0*jac77;
+    Jw[10] = -F_f*jac51 - jac51*jac77;
+    Jw[11] = -F_f*jac68 - jac68*jac77;
+
+    for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) J[k] = 0.0;
+    for (int j = 0; j < 6; ++j) {
+        double column[3];
+        for (int i = 0; i < 3; ++i) column[i] = G[i * 6 + j];
+        cholesky_solve(M, column);
+        for (int i = 0; i < 3; ++i) J[(3 + i) * MODEL_NSTATE + j] = column[i];
+        for (int k = 0; k < 2; ++k) J[(6 + k) * MODEL_NSTATE + j] = Jw[k * 6 + j];
+    }
+    for (int i = 0; i < 3; ++i) J[i * MODEL_NSTATE + 3 + i] = 1.0;  /* dq/dt = u */
+    for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) {
+        if (!isfinite(J[k])) return 1;
+    }
+    return 0;
 }

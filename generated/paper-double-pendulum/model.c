@@ -8,9 +8,9 @@
 
 #include "model.h"
 
-/* Solve M x = b in place for symmetric positive definite M (lower triangle filled) by
- * Cholesky factorization. Returns nonzero if M is not positive definite. */
-static int solve_spd(double *M, double *b)
+/* Cholesky factorization in place of a symmetric positive definite M (lower triangle
+ * filled): M = L L^T. Returns nonzero if M is not positive definite. */
+static int cholesky_factor(double *M)
 {
     const int n = MODEL_NQ;
     for (int j = 0; j < n; ++j) {
@@ -25,17 +25,23 @@ static int solve_spd(double *M, double *b)
             M[i * n + j] = s / d;
         }
     }
+    return 0;
+}
+
+/* Solve L L^T x = b in place, with the factor from cholesky_factor. */
+static void cholesky_solve(const double *L, double *b)
+{
+    const int n = MODEL_NQ;
     for (int i = 0; i < n; ++i) {
         double s = b[i];
-        for (int k = 0; k < i; ++k) s -= M[i * n + k] * b[k];
-        b[i] = s / M[i * n + i];
+        for (int k = 0; k < i; ++k) s -= L[i * n + k] * b[k];
+        b[i] = s / L[i * n + i];
     }
     for (int i = n - 1; i >= 0; --i) {
         double s = b[i];
-        for (int k = i + 1; k < n; ++k) s -= M[k * n + i] * b[k];
-        b[i] = s / M[i * n + i];
+        for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * b[k];
+        b[i] = s / L[i * n + i];
     }
-    return 0;
 }
 
 double model_normal_force(double delta, const model_params *p)
@@ -80,6 +86,54 @@ double model_normal_force(double delta, const model_params *p)
     }
 }
 
+/* dF/d(delta) of the active normal-force law, for the Jacobian. */
+static double normal_force_slope(double delta, const model_params *p)
+{
+    switch (p->phase) {
+    case MODEL_PHASE_ELASTIC: {
+        const double E_star = p->E_star;
+        const double R = p->R;
+
+        if (!(delta > 0)) return 0.0;
+        const double dF = 2*E_star*sqrt(R)*sqrt(delta);
+
+        return dF;
+    }
+    case MODEL_PHASE_ELASTOPLASTIC: {
+        const double R = p->R;
+        const double delta_c = p->delta_c;
+        const double P_c = p->P_c;
+        const double C_j = p->C_j;
+        const double B = p->B;
+
+        if (!(delta > 0)) return 0.0;
+        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)/pow(delta_c, 5.0/12.0));
+        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)/pow(delta_c, 5.0/9.0));
+        const double s2 = (1.0/C_j);
+        const double s3 = pow((10.0/19.0)*delta/delta_c, B);
+        const double s4 = 3.14159265358979323846*sqrt(delta*s3)/sqrt(R);
+        const double s5 = s2*(0.92*cos(s4) + 1.92);
+        const double s6 = pow(delta, 0.10000000000000009)*pow(delta_c, -1.1)*(1 - s1);
+        const double s7 = (1.0/2.0)*s3;
+        const double dF = P_c*(-0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) + (3.0/2.0)*sqrt(delta)*s0/(delta_c*sqrt(delta_c)) + (10.0/351.0)*pow(delta, 0.6555555555555557)*pow(delta_c, -1.6555555555555557)*s1*s5 - 3.68*s2*s4*s6*(B*s7 + s7)*sin(s4)/s3 + 4.4*s5*s6);
+
+        return dF;
+    }
+    case MODEL_PHASE_RESTITUTION: {
+        const double E_star = p->E_star;
+        const double delta_r = p->delta_r;
+        const double R_res = p->R_res;
+
+        if (!(delta > delta_r)) return 0.0;
+        const double dF = 2*E_star*sqrt(R_res)*sqrt(delta - delta_r);
+
+        return dF;
+    }
+    default:
+        return 0.0;
+    }
+}
+
 int model_rhs(double t, const double *y, double *ydot, const model_params *p)
 {
     (void)t;
@@ -114,16 +168,20 @@ int model_rhs(double t, const double *y, double *ydot, const model_params *p)
     /* Kane's equations M du/dt = f (lower triangle of M) */
     double M[4];
     double f[2];
-    const double kin0 = (1.0/2.0)*m2;
-    const double kin1 = cos_q1*g;
-    const double kin2 = cos_q1*sin_q2 - cos_q2*sin_q1;
-    M[0] = (L1*L1)*((1.0/3.0)*m1 + m2);
-    M[2] = L1*L2*kin0*(cos_q1*cos_q2 + sin_q1*sin_q2);
+    const double kin0 = (L1*L1);
+    const double kin1 = L1*m2;
+    const double kin2 = (1.0/2.0)*L2;
+    const double kin3 = kin1*kin2;
+    const double kin4 = cos_q1*g;
+    const double kin5 = cos_q1*sin_q2 - cos_q2*sin_q1;
+    M[0] = (1.0/3.0)*kin0*m1 + kin0*m2;
+    M[2] = kin3*(cos_q1*cos_q2 + sin_q1*sin_q2);
     M[3] = (1.0/3.0)*(L2*L2)*m2;
-    f[0] = L1*(F*cos_q1 - F_f*sin_q1 + (1.0/2.0)*L2*kin2*m2*(u2*u2) - 1.0/2.0*kin1*m1 - kin1*m2);
-    f[1] = L2*(F*cos_q2 - F_f*sin_q2 - L1*kin0*kin2*(u1*u1) - cos_q2*g*kin0);
+    f[0] = -1.0/2.0*L1*kin4*m1 + L1*(F*cos_q1 - F_f*sin_q1) - kin1*kin4 + kin3*kin5*(u2*u2);
+    f[1] = L2*(F*cos_q2 - F_f*sin_q2) - cos_q2*g*kin2*m2 - kin3*kin5*(u1*u1);
 
-    if (solve_spd(M, f)) return -1;
+    if (cholesky_factor(M)) return -1;
+    cholesky_solve(M, f);
     ydot[0] = y[2];
     ydot[1] = y[3];
     ydot[2] = f[0];
@@ -201,14 +259,14 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
 
     const double en0 = (L1*L1)*(u1*u1);
-    const double en1 = (L2*L2)*(u2*u2);
-    const double en2 = L1*L2*u1*u2*(cos_q1*cos_q2 + sin_q1*sin_q2);
-    const double en3 = 4*en0;
+    const double en1 = (1.0/6.0)*en0*m1;
+    const double en2 = (L2*L2)*(u2*u2);
+    const double en3 = (1.0/24.0)*en2*m2 + (1.0/2.0)*m2*(L1*L2*u1*u2*(cos_q1*cos_q2 + sin_q1*sin_q2) + en0 + (1.0/4.0)*en2);
     const double en4 = L1*sin_q1;
-    const double T1 = (1.0/6.0)*en0*m1;
-    const double T2 = (1.0/24.0)*m2*(12*en0 + 4*en1 + 12*en2);
-    const double T = (1.0/24.0)*en1*m2 + (1.0/24.0)*en3*m1 + (1.0/8.0)*m2*(en1 + 4*en2 + en3);
-    const double V = (1.0/2.0)*g*(en4*m1 + m2*(L2*sin_q2 + 2*en4));
+    const double T1 = en1;
+    const double T2 = en3;
+    const double T = en1 + en3;
+    const double V = (1.0/2.0)*en4*g*m1 + g*m2*((1.0/2.0)*L2*sin_q2 + en4);
 
     out[MODEL_OUT_x_B] = x_B;
     out[MODEL_OUT_y_B] = y_B;
@@ -222,4 +280,126 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     out[MODEL_OUT_T2] = T2;
     out[MODEL_OUT_T] = T;
     out[MODEL_OUT_V] = V;
+}
+
+int model_jacobian(double t, const double *y, double *J, const model_params *p)
+{
+    (void)t;
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double u1 = y[2];
+    const double u2 = y[3];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double m1 = p->m1;
+    const double m2 = p->m2;
+    const double g = p->g;
+    const double y_s = p->y_s;
+    const double mu = p->mu;
+    const double eps = p->eps;
+    const double sin_q1 = sin(q1);
+    const double cos_q1 = cos(q1);
+    const double sin_q2 = sin(q2);
+    const double cos_q2 = cos(q2);
+
+    const double tip0 = L1*sin_q1;
+    const double tip1 = L2*sin_q2;
+    const double delta = -tip0 - tip1 + y_s;
+    const double v_Bx = -tip0*u1 - tip1*u2;
+    const double v_By = L1*cos_q1*u1 + L2*cos_q2*u2;
+
+    const double F = model_normal_force(delta, p);
+    const double dF = normal_force_slope(delta, p);
+    const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+
+    double M[4];
+    double f[2];
+    const double kin0 = (L1*L1);
+    const double kin1 = L1*m2;
+    const double kin2 = (1.0/2.0)*L2;
+    const double kin3 = kin1*kin2;
+    const double kin4 = cos_q1*g;
+    const double kin5 = cos_q1*sin_q2 - cos_q2*sin_q1;
+    M[0] = (1.0/3.0)*kin0*m1 + kin0*m2;
+    M[2] = kin3*(cos_q1*cos_q2 + sin_q1*sin_q2);
+    M[3] = (1.0/3.0)*(L2*L2)*m2;
+    f[0] = -1.0/2.0*L1*kin4*m1 + L1*(F*cos_q1 - F_f*sin_q1) - kin1*kin4 + kin3*kin5*(u2*u2);
+    f[1] = L2*(F*cos_q2 - F_f*sin_q2) - cos_q2*g*kin2*m2 - kin3*kin5*(u1*u1);
+
+    if (cholesky_factor(M)) return -1;
+    cholesky_solve(M, f);
+    const double udot1 = f[0];
+    const double udot2 = f[1];
+    /* G = df/dy - (dM/dy) du/dt (total derivatives through F and F_f); Jw: the works */
+    double G[8];
+    double Jw[8];
+    const double jac0 = L1*sin_q1;
+    const double jac1 = g*jac0;
+    const double jac2 = (L1*L1);
+    const double jac3 = F*sin_q1;
+    const double jac4 = F_f*cos_q1;
+    const double jac5 = L1*L2;
+    const double jac6 = cos_q1*sin_q2 - cos_q2*sin_q1;
+    const double jac7 = jac6*m2;
+    const double jac8 = (1.0/2.0)*jac5*jac7;
+    const double jac9 = cos_q1*cos_q2;
+    const double jac10 = sin_q1*sin_q2;
+    const double jac11 = jac10 + jac9;
+    const double jac12 = -jac11;
+    const double jac13 = (u2*u2);
+    const double jac14 = (1.0/2.0)*m2;
+    const double jac15 = jac14*jac5;
+    const double jac16 = L1*cos_q1;
+    const double jac17 = (v_Bx*v_Bx);
+    const double jac18 = (eps*eps) + jac17;
+    const double jac19 = (1.0/sqrt(jac18));
+    const double jac20 = dF*jac19*mu*v_Bx;
+    const double jac21 = F*mu;
+    const double jac22 = jac17*jac21/(jac18*sqrt(jac18)) - jac19*jac21;
+    const double jac23 = jac16*jac20 - jac16*jac22*u1;
+    const double jac24 = dF*jac5*jac9;
+    const double jac25 = -jac6;
+    const double jac26 = jac15*jac25;
+    const double jac27 = L2*cos_q2;
+    const double jac28 = jac20*jac27 - jac22*jac27*u2;
+    const double jac29 = L2*u2;
+    const double jac30 = jac10*jac22*jac5;
+    const double jac31 = (u1*u1);
+    const double jac32 = L2*sin_q2;
+    const double jac33 = (L2*L2);
+    const double jac34 = F*sin_q2;
+    const double jac35 = F_f*cos_q2;
+    const double jac36 = L1*u1;
+    const double jac37 = dF*v_By;
+    const double jac38 = jac22*v_Bx;
+    G[0] = L1*(-jac3 - jac4) - (cos_q1*cos_q1)*dF*jac2 - jac0*jac23 + (1.0/2.0)*jac1*m1 + jac1*m2 + jac12*jac13*jac15 - jac8*udot2;
+    G[1] = (1.0/2.0)*L1*L2*jac11*jac13*m2 - jac0*jac28 - jac24 - jac26*udot2;
+    G[2] = jac2*jac22*(sin_q1*sin_q1);
+    G[3] = L1*jac29*jac7 + jac30;
+    G[4] = (1.0/2.0)*L1*L2*jac11*jac31*m2 - jac23*jac32 - jac24 - jac8*udot1;
+    G[5] = L2*(-jac34 - jac35) - (cos_q2*cos_q2)*dF*jac33 + g*jac14*jac32 + jac12*jac15*jac31 - jac26*udot1 - jac28*jac32;
+    G[6] = L2*jac25*jac36*m2 + jac30;
+    G[7] = jac22*jac33*(sin_q2*sin_q2);
+    Jw[0] = -jac16*jac37 - jac3*jac36;
+    Jw[1] = -jac27*jac37 - jac29*jac34;
+    Jw[2] = F*jac16;
+    Jw[3] = F*jac27;
+    Jw[4] = jac23*v_Bx - jac36*jac4;
+    Jw[5] = jac28*v_Bx - jac29*jac35;
+    Jw[6] = -F_f*jac0 - jac0*jac38;
+    Jw[7] = -F_f*jac32 - jac32*jac38;
+
+    for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) J[k] = 0.0;
+    for (int j = 0; j < 4; ++j) {
+        double column[2];
+        for (int i = 0; i < 2; ++i) column[i] = G[i * 4 + j];
+        cholesky_solve(M, column);
+        for (int i = 0; i < 2; ++i) J[(2 + i) * MODEL_NSTATE + j] = column[i];
+        for (int k = 0; k < 2; ++k) J[(4 + k) * MODEL_NSTATE + j] = Jw[k * 4 + j];
+    }
+    for (int i = 0; i < 2; ++i) J[i * MODEL_NSTATE + 2 + i] = 1.0;  /* dq/dt = u */
+    for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) {
+        if (!isfinite(J[k])) return 1;
+    }
+    return 0;
 }

@@ -17,6 +17,7 @@ extern "C" {
 #define MODEL_NSTATE 6
 #define MODEL_NEVENT 5
 #define MODEL_NOUT 12
+#define MODEL_HAS_JACOBIAN 1
 
 /* Contact phases (MODEL section 4); params.phase selects the normal-force law. */
 enum {
@@ -78,6 +79,8 @@ int model_rhs(double t, const double *y, double *ydot, const model_params *p);
 double model_normal_force(double delta, const model_params *p);
 void model_events(double t, const double *y, double *ev, const model_params *p);
 void model_outputs(double t, const double *y, double *out, const model_params *p);
+/* J[i * NSTATE + j] = d ydot_i / d y_j (row-major); returns as model_rhs does. */
+int model_jacobian(double t, const double *y, double *J, const model_params *p);
 
 #ifdef __cplusplus
 }

@@ -5,6 +5,7 @@ the repository's scenes, steel chains and random scenes, compared quantity by qu
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib.resources
 import math
 import sys
@@ -60,9 +61,7 @@ def random_scene(rng: np.random.Generator, n: int, name: str, rtol: float) -> Sc
 
 
 def with_tolerance(scene: Scene, rtol: float) -> Scene:
-    return scene.replace(solver=scene.solver.__class__(scene.solver.method, rtol, rtol * 1e-2,
-                                                       scene.solver.t_end, scene.solver.t_max,
-                                                       scene.solver.max_steps))
+    return scene.replace(solver=dataclasses.replace(scene.solver, rtol=rtol, atol=rtol * 1e-2))
 
 
 def standard_scenes(links: Iterable[int], rtol: float) -> list[Scene]:

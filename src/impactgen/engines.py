@@ -15,7 +15,7 @@ def model_spec(scene: Scene) -> ModelSpec:
         raise SceneError("contact.friction_mode", "'coulomb' (exact stick-slip) is not "
                          "available yet; use 'regularized' with a small friction_eps")
     friction = "regularized" if scene.contact.friction > 0 else "none"
-    return ModelSpec(scene.n, scene.contact.model, friction)
+    return ModelSpec(scene.n, scene.contact.model, friction, scene.solver.jacobian == "analytic")
 
 
 def simulate(scene: Scene, engine: str = "c", **options) -> SimulationResult:

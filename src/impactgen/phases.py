@@ -57,7 +57,8 @@ class CvodeSession:
         err = ffi.new("char[]", 512)
         method = 0 if scene.solver.method == "bdf" else 1
         atol_c = ffi.new("double[]", [float(a) for a in atol])
-        solver = lib.ig_solver_new(method, scene.solver.rtol, atol_c, scene.solver.max_steps, err, 512)
+        analytic = 1 if model.spec.jacobian else 0
+        solver = lib.ig_solver_new(method, analytic, scene.solver.rtol, atol_c, scene.solver.max_steps, err, 512)
         if solver == ffi.NULL:
             raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
         self.solver = ffi.gc(solver, lib.ig_solver_free)

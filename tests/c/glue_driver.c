@@ -47,9 +47,9 @@ int main(void)
     for (int k = 0; k < MODEL_NSTATE; ++k) atol[k] = 1e-12;
 
     /* bad arguments: NULL with a message, nothing leaked */
-    EXPECT(ig_solver_new(7, 1e-8, atol, 1000, err, sizeof err) == NULL && err[0], "bad method refused");
+    EXPECT(ig_solver_new(7, MODEL_HAS_JACOBIAN, 1e-8, atol, 1000, err, sizeof err) == NULL && err[0], "bad method refused");
     atol[0] = -1.0;
-    EXPECT(ig_solver_new(0, 1e-8, atol, 1000, err, sizeof err) == NULL && err[0], "bad atol refused");
+    EXPECT(ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-8, atol, 1000, err, sizeof err) == NULL && err[0], "bad atol refused");
     atol[0] = 1e-12;
 
     model_params p = paper_params();
@@ -60,7 +60,7 @@ int main(void)
     initial_state(y0);
 
     /* a whole elastic phase through a 7-sample buffer: continuation, then the yield root */
-    ig_solver *s = ig_solver_new(0, 1e-10, atol, 100000, err, sizeof err);
+    ig_solver *s = ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-10, atol, 100000, err, sizeof err);
     EXPECT(s != NULL, "solver created");
     EXPECT(ig_segment_advance(s, t_buf, y_buf, 7, &n, roots) == IG_ERR_USAGE, "advance before start refused");
     const int bad_event[1] = {99};
@@ -82,7 +82,7 @@ int main(void)
     ig_solver_free(s);
 
     /* too much work */
-    s = ig_solver_new(0, 1e-10, atol, 5, err, sizeof err);
+    s = ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-10, atol, 5, err, sizeof err);
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started (max_steps 5)");
     flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots);
     EXPECT(flag == IG_ERR_TOO_MUCH_WORK && strstr(ig_solver_message(s), "max_steps"), "too much work reported");
@@ -92,7 +92,7 @@ int main(void)
     model_params bad = p;
     bad.E_star = NAN;
     y0[0] -= 0.001;  /* start inside the surface so that the force is evaluated */
-    s = ig_solver_new(0, 1e-10, atol, 100000, err, sizeof err);
+    s = ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-10, atol, 100000, err, sizeof err);
     EXPECT(ig_segment_start(s, &bad, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started (NaN)");
     do { flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots); } while (flag == IG_BUFFER_FULL);
     EXPECT(flag == IG_ERR_SOLVER && ig_solver_message(s)[0], "solver failure reported");

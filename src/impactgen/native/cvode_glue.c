@@ -38,6 +38,7 @@ struct ig_solver {
     long max_steps;
     long segment_steps;
     ig_stats total;   /* counters of finished segments */
+    double *jac;      /* row-major buffer for model_jacobian */
     int initialised;  /* CVodeInit has been called */
     int active;       /* a segment is under way */
     char message[512];
@@ -82,6 +83,22 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *user_data)
     return 0;
 }
 
+#if MODEL_HAS_JACOBIAN
+static int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data,
+                    N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
+{
+    (void)fy; (void)tmp1; (void)tmp2; (void)tmp3;
+    const ig_solver *s = (const ig_solver *)user_data;
+    const int flag = model_jacobian(t, N_VGetArrayPointer(y), s->jac, s->params);
+    if (flag != 0) return flag;
+    for (int j = 0; j < MODEL_NSTATE; ++j) {
+        sunrealtype *column = SUNDenseMatrix_Column(J, j);
+        for (int i = 0; i < MODEL_NSTATE; ++i) column[i] = s->jac[i * MODEL_NSTATE + j];
+    }
+    return 0;
+}
+#endif
+
 static void add_counters(const ig_solver *s, ig_stats *st)
 {
     long v;
@@ -104,11 +121,12 @@ void ig_solver_free(ig_solver *s)
     if (s->y) N_VDestroy(s->y);
     if (s->abstol) N_VDestroy(s->abstol);
     if (s->ctx) SUNContext_Free(&s->ctx);
+    free(s->jac);
     free(s);
 }
 
-ig_solver *ig_solver_new(int method, double rtol, const double *atol, long max_steps,
-                         char *err, int errlen)
+ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const double *atol,
+                         long max_steps, char *err, int errlen)
 {
     ig_solver *s = (ig_solver *)calloc(1, sizeof *s);
     const char *failed = NULL;
@@ -118,6 +136,7 @@ ig_solver *ig_solver_new(int method, double rtol, const double *atol, long max_s
     }
     if (method != 0 && method != 1) failed = "method must be 0 (BDF) or 1 (Adams)";
     else if (!(rtol > 0.0) || max_steps <= 0) failed = "rtol and max_steps must be positive";
+    else if (analytic_jacobian && !MODEL_HAS_JACOBIAN) failed = "this model was generated without its Jacobian";
 #if SUNDIALS_VERSION_MAJOR >= 7
     else if (SUNContext_Create(SUN_COMM_NULL, &s->ctx) != 0) failed = "SUNContext_Create failed";
 #else
@@ -156,6 +175,13 @@ ig_solver *ig_solver_new(int method, double rtol, const double *atol, long max_s
         else if (CVodeSetMaxConvFails(s->cvode, 50) != CV_SUCCESS) failed = "CVodeSetMaxConvFails failed";
         else if (CVodeSetMaxErrTestFails(s->cvode, 50) != CV_SUCCESS) failed = "CVodeSetMaxErrTestFails failed";
     }
+#if MODEL_HAS_JACOBIAN
+    if (!failed && analytic_jacobian) {
+        s->jac = (double *)malloc(sizeof(double) * MODEL_NSTATE * MODEL_NSTATE);
+        if (!s->jac) failed = "out of memory";
+        else if (CVodeSetJacFn(s->cvode, jacobian) != CV_SUCCESS) failed = "CVodeSetJacFn failed";
+    }
+#endif
     if (failed) {
         snprintf(err, (size_t)errlen, "%s%s%s", failed, s->message[0] ? ": " : "", s->message);
         ig_solver_free(s);

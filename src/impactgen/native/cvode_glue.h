@@ -32,10 +32,11 @@ typedef struct {
     long ngev;       /* root function calls */
 } ig_stats;
 
-/* method: 0 = BDF, 1 = Adams. atol has MODEL_NSTATE entries. Returns NULL on failure with a
- * message in err (errlen bytes). */
-ig_solver *ig_solver_new(int method, double rtol, const double *atol, long max_steps,
-                         char *err, int errlen);
+/* method: 0 = BDF, 1 = Adams; analytic_jacobian: 1 to give CVODE model_jacobian (the model
+ * must have one), 0 for CVODE's difference quotients. atol has MODEL_NSTATE entries.
+ * Returns NULL on failure with a message in err (errlen bytes). */
+ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const double *atol,
+                         long max_steps, char *err, int errlen);
 void ig_solver_free(ig_solver *s);
 
 /* Begin a segment at (t0, y0) under params; the solver keeps a pointer to params, which
