@@ -4,6 +4,7 @@
     impactgen generate SCENE [--out DIR]       generate and compile what SCENE needs
     impactgen run SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
     impactgen crosscheck [--links 1-6] [--random N] [--seed S] [--json]
+    impactgen plot SCENE [--out DIR] [--set KEY=VALUE ...]
 
 Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
 on stderr; --debug shows the traceback.
@@ -57,6 +58,13 @@ def _parser() -> argparse.ArgumentParser:
     cc.add_argument("--json", action="store_true")
     cc.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    plot = sub.add_parser("plot", help="figures of one simulation (the paper's Figures 4-8)")
+    plot.add_argument("scene", type=Path)
+    plot.add_argument("--out", type=Path, help="folder for the PNG files (default plots/<name>)")
+    plot.add_argument("--engine", choices=("c", "reference"), default="c")
+    plot.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    plot.add_argument("--debug", action="store_true", help="show tracebacks")
+
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path)
     gen.add_argument("--out", type=Path)
@@ -76,6 +84,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args)
         if args.command == "crosscheck":
             return _crosscheck(args)
+        if args.command == "plot":
+            return _plot(args)
         if args.command == "generate":
             from .scene import load_scene
             scene = load_scene(args.scene, _overrides(args.set))
@@ -143,6 +153,21 @@ def _run(args: argparse.Namespace) -> int:
         print(json.dumps(result.to_json_dict()))
         return 0
     print(format_summary(result))
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    import impactgen
+    from .plots import plot_simulation
+    scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    result = impactgen.simulate(scene, engine=args.engine)
+    out = args.out or Path("plots") / scene.name
+    try:
+        paths = plot_simulation(result, out)
+    except OSError as exc:
+        raise SceneError("--out", f"cannot write the figures to {out}: {exc}") from None
+    for path in paths:
+        print(path)
     return 0
 
 
