@@ -30,6 +30,7 @@ def hertz_force(d: sm.Expr = delta, radius: sm.Expr = R) -> sm.Expr:
 
 
 w = sm.Symbol("w", positive=True)  # delta / delta_c
+ln_w = sm.Symbol("ln_w", real=True)  # log(w), shared by the law's fractional powers
 a = sm.Symbol("a", positive=True)  # contact radius
 H_over_S_y = sm.Symbol("H_over_S_y", positive=True)  # hardness over yield strength
 
@@ -37,13 +38,19 @@ H_over_S_y = sm.Symbol("H_over_S_y", positive=True)  # hardness over yield stren
 def jackson_green_steps(d: sm.Expr = delta) -> tuple[tuple[sm.Symbol, sm.Expr], ...]:
     """Phase II (Eq. 10), the modified Jackson-Green law, as named steps ending in F."""
     F = sm.Symbol("F")
+
+    def w_pow(k):  # w^k as exp(k ln w): one logarithm serves every fractional power
+        return sm.exp(k * ln_w)
+
     return (
         (w, d / delta_c),
-        (a, sm.sqrt(R * d * (d / (YIELD_ONSET * delta_c)) ** B)),
+        (ln_w, sm.log(w)),
+        # a = (R delta (delta / (1.9 delta_c))^B)^(1/2), with delta/(1.9 delta_c) = w/1.9
+        (a, sm.sqrt(R * d * sm.exp(B * (ln_w - sm.log(YIELD_ONSET))))),
         (H_over_S_y, sm.Float(2.84) - sm.Float(0.92) * (1 - sm.cos(sm.pi * a / R))),
-        (F, P_c * (sm.exp(-sm.Float(0.17) * w ** sm.Rational(5, 12)) * w ** sm.Rational(3, 2)
-                   + 4 * H_over_S_y / C_j * (1 - sm.exp(-w ** sm.Rational(5, 9) / 78))
-                   * w ** sm.Float(1.1))),
+        (F, P_c * (sm.exp(-sm.Float(0.17) * w_pow(sm.Rational(5, 12))) * w * sm.sqrt(w)
+                   + 4 * H_over_S_y / C_j * (1 - sm.exp(-w_pow(sm.Rational(5, 9)) / 78))
+                   * w_pow(sm.Float(1.1)))),
     )
 
 

@@ -57,9 +57,23 @@ class ChainEquations:
     potential_energy: sm.Expr  # V
 
 
+@dataclass(frozen=True)
+class KaneSystem:
+    """The chain as sympy.physics.mechanics builds it (dynamic symbols q(t), u(t))."""
+
+    kane: me.KanesMethod
+    N: me.ReferenceFrame
+    O: me.Point
+    tip: me.Point
+    bodies: tuple[me.RigidBody, ...]
+    q: tuple
+    u: tuple
+    symbols: ChainSymbols
+
+
 @lru_cache(maxsize=8)
-def derive_chain(n: int) -> ChainEquations:
-    """Derive the n-link chain with sympy.physics.mechanics.KanesMethod."""
+def kane_system(n: int) -> KaneSystem:
+    """Form Kane's equations of the n-link chain with sympy.physics.mechanics.KanesMethod."""
     if n < 1:
         raise ValueError("a chain needs at least one link")
     s = ChainSymbols.for_links(n)
@@ -89,8 +103,15 @@ def derive_chain(n: int) -> ChainEquations:
     kane = me.KanesMethod(N, q_ind=q, u_ind=u,
                           kd_eqs=[qi.diff() - ui for qi, ui in zip(q, u)])
     kane.kanes_equations(bodies, loads)
+    return KaneSystem(kane, N, O, tip, tuple(bodies), tuple(q), tuple(u), s)
 
-    plain = {**dict(zip(q, s.q)), **dict(zip(u, s.u))}
+
+@lru_cache(maxsize=8)
+def derive_chain(n: int) -> ChainEquations:
+    """The n-link chain's equations (Kane's method) in plain symbols, ready for code."""
+    system = kane_system(n)
+    kane, N, O, tip, bodies, s = system.kane, system.N, system.O, system.tip, system.bodies, system.symbols
+    plain = {**dict(zip(system.q, s.q)), **dict(zip(system.u, s.u))}
 
     def to_plain(expr: sm.Expr) -> sm.Expr:
         return me.msubs(expr, plain)

@@ -65,9 +65,10 @@ double model_normal_force(double delta, const model_params *p)
 
         if (!(delta > 0)) return 0.0;
         const double w = delta/delta_c;
-        const double a = sqrt(R)*sqrt(delta*pow((10.0/19.0)*delta/delta_c, B));
+        const double ln_w = log(w);
+        const double a = sqrt(R)*sqrt(delta)*exp((1.0/2.0)*B*(ln_w - log(19.0/10.0)));
         const double H_over_S_y = 0.92*cos(3.14159265358979323846*a/R) + 1.92;
-        const double F = P_c*((w*sqrt(w))*exp(-0.17*pow(w, 5.0/12.0)) + 4*H_over_S_y*pow(w, 1.1)*(1 - exp(-1.0/78.0*pow(w, 5.0/9.0)))/C_j);
+        const double F = P_c*((w*sqrt(w))*exp(-0.17*exp((5.0/12.0)*ln_w)) + 4*H_over_S_y*(1 - exp(-1.0/78.0*exp((5.0/9.0)*ln_w)))*exp(1.1*ln_w)/C_j);
 
         return F;
     }
@@ -108,14 +109,16 @@ static double normal_force_slope(double delta, const model_params *p)
 
         if (!(delta > 0)) return 0.0;
         const double s0 = exp(-0.17*pow(delta, 5.0/12.0)/pow(delta_c, 5.0/12.0));
-        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)/pow(delta_c, 5.0/9.0));
-        const double s2 = (1.0/C_j);
-        const double s3 = pow((10.0/19.0)*delta/delta_c, B);
-        const double s4 = 3.14159265358979323846*sqrt(delta*s3)/sqrt(R);
-        const double s5 = s2*(0.92*cos(s4) + 1.92);
-        const double s6 = pow(delta, 0.10000000000000009)*pow(delta_c, -1.1)*(1 - s1);
-        const double s7 = (1.0/2.0)*s3;
-        const double dF = P_c*(-0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) + (3.0/2.0)*sqrt(delta)*s0/(delta_c*sqrt(delta_c)) + (10.0/351.0)*pow(delta, 0.6555555555555557)*pow(delta_c, -1.6555555555555557)*s1*s5 - 3.68*s2*s4*s6*(B*s7 + s7)*sin(s4)/s3 + 4.4*s5*s6);
+        const double s1 = sqrt(delta);
+        const double s2 = exp(-1.0/78.0*pow(delta, 5.0/9.0)/pow(delta_c, 5.0/9.0));
+        const double s3 = (1.0/C_j);
+        const double s4 = (1.0/2.0)*B;
+        const double s5 = 3.14159265358979323846*exp(s4*(log(delta/delta_c) - log(19.0/10.0)))/sqrt(R);
+        const double s6 = s1*s5;
+        const double s7 = s3*(0.92*cos(s6) + 1.92);
+        const double s8 = pow(delta_c, -1.1)*(1 - s2);
+        const double s9 = s5/s1;
+        const double dF = P_c*(-0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) + 4.4*pow(delta, 0.10000000000000009)*s7*s8 + (10.0/351.0)*pow(delta, 0.6555555555555557)*pow(delta_c, -1.6555555555555557)*s2*s7 - 3.68*pow(delta, 1.1)*s3*s8*(s4*s9 + (1.0/2.0)*s9)*sin(s6) + (3.0/2.0)*s0*s1/(delta_c*sqrt(delta_c)));
 
         return dF;
     }

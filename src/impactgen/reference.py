@@ -259,6 +259,35 @@ def _after(phase: str, event: str, contact: Contact) -> str:
 
 
 @dataclass
+class Segment:
+    """What an integrator returns for one phase: samples after t0 (the event point last when
+    an event fired), the events that fired, and its counters."""
+
+    t: np.ndarray
+    y: np.ndarray
+    fired: list[str]
+    nsteps: int
+    nfev: int
+    njev: int
+
+
+def solve_ivp_segment(model: "ReferenceModel", phase: str, t0: float, y0: np.ndarray, t_final: float,
+                      events: dict[str, object], method: str, rtol: float, atol: np.ndarray) -> Segment:
+    """Integrate one phase with scipy.integrate.solve_ivp and its terminal events."""
+    names = list(events)
+    sol = solve_ivp(lambda t_, y_: model.rhs(t_, y_, phase), (t0, t_final), y0, method=method,
+                    rtol=rtol, atol=atol, events=list(events.values()))
+    if sol.status < 0:
+        raise SolverError(f"solve_ivp ({method}): {sol.message}", phase, float(sol.t[-1]))
+    fired = [names[i] for i, te in enumerate(sol.t_events) if len(te)]
+    seg_t, seg_y = sol.t[1:], sol.y.T[1:]
+    if fired:  # the last sample is the event point
+        seg_t = np.append(seg_t[:-1], sol.t_events[names.index(fired[0])][0])
+        seg_y = np.vstack([seg_y[:-1], sol.y_events[names.index(fired[0])][0]])
+    return Segment(seg_t, seg_y, fired, len(sol.t) - 1, sol.nfev, sol.njev)
+
+
+@dataclass
 class _Recorder:
     t: list = field(default_factory=list)
     y: list = field(default_factory=list)
@@ -275,14 +304,17 @@ class _Recorder:
 
 
 def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
-             atol: float | None = None) -> SimulationResult:
-    """Run `scene` through the phases with solve_ivp; the result has the C engine's shape."""
-    if method not in METHODS:
+             atol: float | None = None, model: ReferenceModel | None = None,
+             integrate=solve_ivp_segment, engine: str = "reference") -> SimulationResult:
+    """Run `scene` through the phases with solve_ivp; the result has the C engine's shape.
+    `model` and `integrate` let a benchmark put another right-hand side or integrator
+    under the same phase loop."""
+    if method not in METHODS and integrate is solve_ivp_segment:
         raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
     if scene.contact.friction > 0 and scene.contact.friction_mode == "coulomb":
         raise SceneError("contact.friction_mode", "'coulomb' is not available yet; use 'regularized'")
     started = time.perf_counter()
-    model = ReferenceModel.from_scene(scene)
+    model = model or ReferenceModel.from_scene(scene)
     n = scene.n
     rtol = scene.solver.rtol if rtol is None else rtol
     atol_q = scene.solver.atol if atol is None else atol
@@ -305,20 +337,11 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     stats = {"nsteps": 0, "nfev": 0, "njev": 0}
     status, message = "ok", ""
     while True:
-        events = _phase_events(model, phase)
-        names = list(events)
-        sol = solve_ivp(lambda t_, y_, p=phase: model.rhs(t_, y_, p), (t, t_final), y, method=method,
-                        rtol=rtol, atol=atol_vec, events=list(events.values()))
-        if sol.status < 0:
-            raise SolverError(f"solve_ivp ({method}): {sol.message}", phase, float(sol.t[-1]))
-        stats["nsteps"] += len(sol.t) - 1
-        stats["nfev"] += sol.nfev
-        stats["njev"] += sol.njev
-        fired = [names[i] for i, te in enumerate(sol.t_events) if len(te)]
-        seg_t, seg_y = sol.t[1:], sol.y.T[1:]
-        if fired:  # solve_ivp's last sample is the event point
-            seg_t = np.append(seg_t[:-1], sol.t_events[names.index(fired[0])][0])
-            seg_y = np.vstack([seg_y[:-1], sol.y_events[names.index(fired[0])][0]])
+        seg = integrate(model, phase, t, y, t_final, _phase_events(model, phase), method, rtol, atol_vec)
+        stats["nsteps"] += seg.nsteps
+        stats["nfev"] += seg.nfev
+        stats["njev"] += seg.njev
+        fired, seg_t, seg_y = seg.fired, seg.t, seg.y
         rec.add(model, seg_t, seg_y, phase)
         t, y = float(seg_t[-1]), seg_y[-1].copy()
         spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end"))
@@ -349,4 +372,4 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     trajectory = Trajectory(np.concatenate(rec.t), np.concatenate(rec.y), np.concatenate(rec.phase), outputs)
     stats.update(segments=len(spans), samples=rec.count, wall_s=time.perf_counter() - started,
                  method=method)
-    return SimulationResult(scene, "reference", status, message, trajectory, spans, impacts, stats)
+    return SimulationResult(scene, engine, status, message, trajectory, spans, impacts, stats)

@@ -1,0 +1,160 @@
+"""Work-precision: error against run time for every contender, tolerance by tolerance.
+
+The error of a run is measured against a solution computed far more accurately: CVODE
+BDF at rtol 1e-13 (atol 1e-15), checked against the independent reference engine (Radau)
+at rtol 1e-12; their disagreement is reported beside the results. Time is the median wall
+time of repeated runs in a warm process (models compiled, caches filled).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import statistics
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..scene import Scene, load_scene, steel_chain_scene
+from .contenders import BudgetExceeded, Contender, available_contenders, with_tolerance
+
+TRUTH_RTOL = 1e-13
+CHECK_RTOL = 1e-12
+
+
+@dataclass(frozen=True)
+class Settings:
+    rtols: tuple[float, ...]
+    repeats: int
+    budget: int  # right-hand-side calls for the Python-driven contenders
+    slow_s: float  # a run slower than this is not repeated, and ends the contender's sweep
+    scenes: tuple[str, ...]
+
+
+QUICK = Settings(tuple(10.0 ** -k for k in range(3, 11)), 3, 200_000, 2.0, ("paper", "chain3"))
+FULL = Settings(tuple(10.0 ** (-k / 2) for k in range(6, 25)), 5, 2_000_000, 20.0, ("paper", "chain3", "chain6"))
+
+
+@dataclass
+class Run:
+    scene: str
+    contender: str
+    family: str
+    rtol: float
+    status: str  # "ok", "budget", "failed: ..."
+    wall_s: float = math.nan
+    err_u_final: float = math.nan
+    err_delta_r: float = math.nan
+    err_delta_T: float = math.nan
+    nsteps: int = 0
+    nfev: int = 0
+
+
+@dataclass
+class Truth:
+    scene: str
+    summary: dict
+    check: dict  # relative disagreement of the reference engine with the truth
+    wall_s: dict = field(default_factory=dict)
+
+
+def bench_scenes(names: tuple[str, ...]) -> dict[str, Scene]:
+    from importlib.resources import files
+    from pathlib import Path
+    paper = load_scene(Path(str(files("impactgen.scenes") / "paper.toml")))
+    known = {"paper": paper, "chain3": steel_chain_scene(3), "chain6": steel_chain_scene(6)}
+    return {name: known[name] for name in names}
+
+
+def errors(summary: dict, truth: dict) -> tuple[float, float, float]:
+    u, u_ref = np.array(summary["u_final"]), np.array(truth["u_final"])
+    return (float(np.max(np.abs(u - u_ref)) / np.max(np.abs(u_ref))),
+            abs(summary["delta_r"] - truth["delta_r"]) / abs(truth["delta_r"]),
+            abs(summary["delta_T"] - truth["delta_T"]) / abs(truth["delta_T"]))
+
+
+def compute_truth(name: str, scene: Scene) -> Truth:
+    from ..engines import simulate
+    started = time.perf_counter()
+    accurate = scene.replace(solver=dataclasses.replace(scene.solver, rtol=TRUTH_RTOL, atol=1e-15))
+    c = simulate(accurate, engine="c").summary
+    t_c = time.perf_counter() - started
+    started = time.perf_counter()
+    r = simulate(with_tolerance(scene, CHECK_RTOL), engine="reference").summary
+    t_r = time.perf_counter() - started
+    e = errors(r, c)
+    return Truth(name, c, {"u_final": e[0], "delta_r": e[1], "delta_T": e[2]},
+                 {"cvode": t_c, "reference": t_r})
+
+
+def measure(contender: Contender, name: str, scene: Scene, rtol: float, truth: Truth,
+            settings: Settings) -> Run:
+    run = Run(name, contender.name, contender.family, rtol, "ok")
+    times = []
+    for k in range(settings.repeats):
+        started = time.perf_counter()
+        try:
+            result = contender.run(scene, rtol, settings.budget)
+        except BudgetExceeded:
+            run.status = "budget"
+            return run
+        except Exception as exc:  # any contender may fail at some tolerance: record why
+            run.status = f"failed: {type(exc).__name__}: {str(exc)[:120]}"
+            return run
+        times.append(time.perf_counter() - started)
+        if times[-1] > settings.slow_s:
+            break
+    run.wall_s = statistics.median(times)
+    run.err_u_final, run.err_delta_r, run.err_delta_T = errors(result.summary, truth.summary)
+    run.nsteps, run.nfev = int(result.stats.get("nsteps", 0)), int(result.stats.get("nfev", 0))
+    return run
+
+
+def progress_bar(done: int, total: int, text: str) -> None:
+    width = 30
+    filled = int(width * done / max(total, 1))
+    end = "\r" if sys.stderr.isatty() else "\n"
+    print(f"[{'#' * filled}{'.' * (width - filled)}] {done}/{total} {text}"[:110].ljust(110),
+          end=end, file=sys.stderr, flush=True)
+
+
+def run_workprecision(settings: Settings) -> tuple[list[Run], list[Truth], list[str]]:
+    contenders, notes = available_contenders()
+    scenes = bench_scenes(settings.scenes)
+    truths, runs = [], []
+    total = len(scenes) * len(contenders) * len(settings.rtols)
+    done = 0
+    for name, scene in scenes.items():
+        progress_bar(done, total, f"{name}: reference solution")
+        truth = compute_truth(name, scene)
+        truths.append(truth)
+        for contender in contenders:
+            contender.run(scene, settings.rtols[0], settings.budget)  # warm: build, import, JIT
+            stopped = False
+            for rtol in settings.rtols:
+                done += 1
+                progress_bar(done, total, f"{name}: {contender.name} rtol {rtol:.0e}")
+                if stopped:
+                    continue
+                run = measure(contender, name, scene, rtol, truth, settings)
+                runs.append(run)
+                if run.status != "ok" or run.wall_s > settings.slow_s:
+                    stopped = True  # tighter tolerances would only cost more
+    print(file=sys.stderr)
+    return runs, truths, notes
+
+
+def time_at_error(runs: list[Run], error: float, key: str = "err_u_final") -> tuple[float, str]:
+    """Wall time a contender needs for `error`, by log-log interpolation between its runs;
+    ('', 'not reached') when its most accurate run is less accurate."""
+    pts = sorted((getattr(r, key), r.wall_s) for r in runs if r.status == "ok" and getattr(r, key) > 0)
+    if not pts:
+        return math.nan, "no run"
+    for (e1, t1), (e2, t2) in zip(pts, pts[1:]):
+        if e1 <= error <= e2:
+            w = (math.log(error) - math.log(e1)) / (math.log(e2) - math.log(e1)) if e2 > e1 else 0.0
+            return math.exp(math.log(t1) + w * (math.log(t2) - math.log(t1))), "interpolated"
+    if error >= pts[-1][0]:
+        return min(t for _, t in pts), "its loosest run is already this accurate"
+    return math.nan, "not reached"
