@@ -5,6 +5,7 @@
     impactgen run SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
     impactgen crosscheck [--links 1-6] [--random N] [--seed S] [--json]
     impactgen plot SCENE [--out DIR] [--set KEY=VALUE ...]
+    impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
 
 Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
 on stderr; --debug shows the traceback.
@@ -65,6 +66,12 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     plot.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    bench = sub.add_parser("bench", help="work-precision, RHS and scaling benchmarks with a report")
+    bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
+    bench.add_argument("--out", type=Path, default=Path("bench-results"))
+    bench.add_argument("--parts", default="workprecision,rhs,scaling")
+    bench.add_argument("--debug", action="store_true", help="show tracebacks")
+
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path)
     gen.add_argument("--out", type=Path)
@@ -86,6 +93,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _crosscheck(args)
         if args.command == "plot":
             return _plot(args)
+        if args.command == "bench":
+            from .bench import run_benchmarks
+            parts = {p.strip() for p in args.parts.split(",") if p.strip()}
+            unknown = parts - {"workprecision", "rhs", "scaling"}
+            if unknown or not parts:
+                raise SceneError("--parts", f"choose from workprecision, rhs, scaling (got {args.parts!r})")
+            print(run_benchmarks(args.out, args.quick, parts))
+            return 0
         if args.command == "generate":
             from .scene import load_scene
             scene = load_scene(args.scene, _overrides(args.set))

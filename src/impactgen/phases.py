@@ -64,6 +64,15 @@ class CvodeSession:
         self.solver = ffi.gc(solver, lib.ig_solver_free)
         self.capacity = FIRST_BUFFER
         self._alloc()
+        # per-segment arguments, allocated once
+        nev = max(len(model.event_names), 1)
+        self.event_idx = ffi.new("int[]", nev)
+        self.event_dirs = ffi.new("int[]", nev)
+        self.roots = ffi.new("int[]", nev)
+        self.n_out = ffi.new("int *")
+        self.y0 = np.empty(model.nstate)
+        self.y0_c = ffi.cast("double *", self.y0.ctypes.data)
+        self.event_index = {name: i for i, name in enumerate(model.event_names)}
 
     def _alloc(self) -> None:
         ffi, n = self.model.ffi, self.model.nstate
@@ -74,15 +83,16 @@ class CvodeSession:
                 events: tuple[tuple[str, int], ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """Integrate from (t0, y0) until an event or t_stop; return samples and fired events."""
         ffi, lib, model = self.model.ffi, self.model.lib, self.model
-        idx = ffi.new("int[]", [model.event_names.index(name) for name, _ in events] or [0])
-        dirs = ffi.new("int[]", [d for _, d in events] or [0])
-        y0_c = ffi.new("double[]", [float(v) for v in y0])
-        flag = lib.ig_segment_start(self.solver, params, t0, y0_c, t_stop, idx, dirs, len(events))
+        for k, (name, direction) in enumerate(events):
+            self.event_idx[k] = self.event_index[name]
+            self.event_dirs[k] = direction
+        self.y0[:] = y0
+        flag = lib.ig_segment_start(self.solver, params, t0, self.y0_c, t_stop, self.event_idx,
+                                    self.event_dirs, len(events))
         if flag < 0:
             raise SolverError(self._message(), phase, t0)
         ts, ys = [], []
-        n_out = ffi.new("int *")
-        roots = ffi.new("int[]", max(len(events), 1))
+        n_out, roots = self.n_out, self.roots
         while True:
             flag = lib.ig_segment_advance(self.solver, self.t_buf, self.y_buf, self.capacity, n_out, roots)
             k = n_out[0]

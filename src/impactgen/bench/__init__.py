@@ -1,0 +1,19 @@
+"""Benchmarks: error against run time, right-hand-side cost, and build cost as n grows."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+
+def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
+    """Run the parts asked for ("workprecision", "rhs", "scaling") and write the report."""
+    from .report import write_report
+    from .rhs import rhs_benchmark
+    from .scaling import scaling
+    from .workprecision import FULL, QUICK, run_workprecision
+    started = time.perf_counter()
+    runs, truths, notes = run_workprecision(QUICK if quick else FULL) if "workprecision" in parts else ([], [], [])
+    rhs_rows = rhs_benchmark((2, 3, 5) if quick else (2, 3, 5, 10, 20)) if "rhs" in parts else []
+    scaling_rows = scaling(tuple(range(1, 5)) if quick else tuple(range(1, 21))) if "scaling" in parts else []
+    return write_report(out, "quick" if quick else "full", runs, truths, notes, rhs_rows, scaling_rows,
+                        time.perf_counter() - started)

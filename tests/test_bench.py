@@ -1,0 +1,56 @@
+"""Benchmarks and plots run and produce what they promise (timings are reported, not asserted)."""
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import pytest
+
+from impactgen.bench import workprecision as wp
+from impactgen.bench.contenders import available_contenders
+from impactgen.bench.rhs import rhs_benchmark
+from impactgen.bench.scaling import scaling
+from conftest import PAPER
+
+pytest.importorskip("matplotlib")
+
+
+def test_plot_writes_the_papers_figures(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "impactgen.cli", "plot", str(PAPER), "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    names = {p.name for p in tmp_path.glob("*.png")}
+    assert names == {"angles.png", "angular_speeds.png", "tip_velocity.png", "deformation_force.png",
+                     "kinetic_energy.png", "energy_budget.png"}
+    assert all(p.stat().st_size > 10_000 for p in tmp_path.glob("*.png"))
+
+
+def test_every_contender_converges_on_the_paper_case():
+    settings = wp.Settings(rtols=(1e-4, 1e-7), repeats=1, budget=300_000, slow_s=60.0, scenes=("paper",))
+    runs, truths, _ = wp.run_workprecision(settings)
+    assert truths[0].check["u_final"] < 1e-8  # the two high-accuracy solutions agree
+    contenders, _ = available_contenders()
+    for c in contenders:
+        mine = {r.rtol: r for r in runs if r.contender == c.name}
+        if c.family in ("impactgen", "reference") or "Radau" in c.name or "LSODA" in c.name:
+            assert all(r.status == "ok" for r in mine.values()), c.name
+        ok = [r for r in mine.values() if r.status == "ok"]
+        if len(ok) == 2:
+            assert mine[1e-7].err_delta_r < mine[1e-4].err_delta_r, c.name
+
+
+def test_time_at_error_interpolates_in_log_log():
+    runs = [wp.Run("s", "c", "f", 1e-4, "ok", wall_s=1.0, err_u_final=1e-4),
+            wp.Run("s", "c", "f", 1e-8, "ok", wall_s=100.0, err_u_final=1e-8)]
+    t, how = wp.time_at_error(runs, 1e-6)
+    assert how == "interpolated" and t == pytest.approx(10.0)
+    assert wp.time_at_error(runs, 1e-10)[1] == "not reached"
+
+
+def test_rhs_and_scaling_benchmarks_report_finite_figures():
+    (row,) = rhs_benchmark((2,))
+    assert all(math.isfinite(v) and v > 0 for v in row.values())
+    rows = scaling((1, 2))
+    assert [r["links"] for r in rows] == [1, 2]
+    assert rows[1]["c_bytes"] > rows[0]["c_bytes"] and all(r["total_s"] > 0 for r in rows)
