@@ -134,3 +134,14 @@ def test_reloading_rules_follow_the_curve_it_left():
     assert _next_phase("reloading", ["passes_delta_m"], True, P, c) == "elastic"
     assert _next_phase("reloading", ["passes_delta_m"], False, P, c) == "elastic"
     assert _next_phase("restitution", ["separation"], True, P, c) == "free"
+
+
+def test_results_outside_the_models_range_carry_warnings():
+    assert impactgen.simulate(impactgen.load_scene(PAPER)).warnings == []
+    slow = impactgen.simulate(impactgen.load_scene(PAPER, overrides={"initial.u": [-0.001, -0.002]}))
+    assert any("elastic limit was never reached" in w for w in slow.warnings)
+    # a soft, weak tip struck hard: deep in the plastic range, contact wider than the tip
+    hard = impactgen.load_scene(PAPER, overrides={"initial.u": [-3.0, -6.0], "rod.tip_radius": 1e-4,
+                                                  "rod.yield_strength": 2e8, "surface.yield_strength": 2e8})
+    warnings = impactgen.simulate(hard).warnings
+    assert any("contact radius" in w for w in warnings) and any("Jackson-Green fits" in w for w in warnings)

@@ -168,6 +168,8 @@ def _run(args: argparse.Namespace) -> int:
         print(json.dumps(result.to_json_dict()))
         return 0
     print(format_summary(result))
+    for warning in result.warnings:
+        print(f"impactgen: warning: {warning}", file=sys.stderr)
     return 0
 
 

@@ -15,6 +15,7 @@ from typing import Callable, Iterable
 
 import numpy as np
 
+from .codegen.expressions import PHASES
 from .results import SimulationResult
 from .scene import Scene, scene_from_dict, load_scene, steel_chain_scene
 
@@ -163,7 +164,7 @@ def stderr_progress(i: int, total: int, scene: Scene) -> None:
 
 # ----------------------------------------------------------------------------- right-hand sides
 
-PHASE_LAWS = ("free", "elastic", "elastoplastic", "restitution")
+PHASE_LAWS = PHASES  # the force laws of the generated C, in the order of params.phase
 
 
 def rhs_pair(scene: Scene, phase: str, y: np.ndarray, delta_m: float) -> tuple[np.ndarray, np.ndarray]:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .build import CompiledModel
+from .codegen.expressions import PHASES
 from .contact_constants import (RESIDUAL_LAWS, YIELD_ONSET, ContactConstants, contact_constants,
                                 unloading_radius)
 from .errors import SolverError
@@ -26,6 +27,7 @@ from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
 
 RISING, FALLING = 1, -1
+LAW_CODE = {name: code for code, name in enumerate(PHASES)}  # params.phase of each force law
 FIRST_BUFFER = 2048  # samples; doubled while a segment keeps filling it
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 
@@ -172,7 +174,6 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     consts = contact_constants(scene)
     plastic = model.spec.plastic
     rules = phase_rules(plastic)
-    law_code = {name: i for i, name in enumerate(("free", "elastic", "elastoplastic", "restitution"))}
     residual = RESIDUAL_LAWS[residual_law]
     params = fill_params(model, scene, consts)
     session = CvodeSession(model, scene, default_atol(scene, model.nstate))
@@ -199,7 +200,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             raise SolverError(f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); "
                               "shorten solver.t_end", phase, t)
         rule = rules[phase]
-        params.phase = law_code[rule.law]
+        params.phase = LAW_CODE[rule.law]
         seg_t, seg_y, fired = session.segment(params, phase, t, y, t_end, rule.events)
         seg_out = session.outputs(params, seg_t, seg_y)
         ts.append(seg_t), ys.append(seg_y), outs.append(seg_out)

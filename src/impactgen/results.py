@@ -92,6 +92,12 @@ class SimulationResult:
     def phase(self) -> np.ndarray:
         return self.trajectory.phase
 
+    @property
+    def warnings(self) -> list[str]:
+        """Where this result leaves the model's range of validity (see validity.py)."""
+        from .validity import validity_warnings
+        return validity_warnings(self.scene, self.impacts)
+
     def __getattr__(self, name: str) -> np.ndarray:
         outputs = self.__dict__.get("trajectory")
         if outputs is not None and name in outputs.outputs:
@@ -165,6 +171,7 @@ class SimulationResult:
             "engine": self.engine,
             "status": self.status,
             "message": self.message,
+            "warnings": self.warnings,
             "summary": _finite(self.summary),
             "phases": [p.to_dict() for p in self.phases],
             "stats": self.stats,

@@ -22,12 +22,12 @@ from .. import reference
 from ..build import compile_model
 from ..contact_constants import contact_constants
 from ..engines import model_spec, simulate
-from ..phases import fill_params, set_params
+from ..phases import LAW_CODE, fill_params, phase_rules, set_params
 from ..reference import ReferenceModel, Segment
 from ..results import SimulationResult
 from ..scene import Scene
 
-LAW_CODES = {"free": 0, "elastic": 1, "elastoplastic": 2, "restitution": 3, "reloading": 3}
+RULES = phase_rules(plastic=True)  # which force law each phase uses (reloading: restitution's)
 
 
 class BudgetExceeded(RuntimeError):
@@ -83,7 +83,7 @@ class CompiledRhsModel(ReferenceModel):
 
     def rhs(self, t: float, y: np.ndarray, phase: str) -> np.ndarray:
         c, ffi = self.contact, self.compiled.ffi
-        self.params.phase = LAW_CODES[phase]
+        self.params.phase = LAW_CODE[RULES[phase].law]
         set_params(self.compiled, self.params, delta_m=c.delta_m, delta_r=c.delta_r, R_res=c.R_res)
         y = np.ascontiguousarray(y, dtype=float)
         self.compiled.lib.model_rhs(t, ffi.cast("double *", y.ctypes.data), self.ydot_c, self.params)
