@@ -105,6 +105,20 @@ def test_touching_but_receding_tip_is_not_an_impact():
     assert result.impacts == [] or result.impacts[0].t_start > 0
 
 
+@pytest.mark.parametrize("engine", ["c", "reference"])
+@pytest.mark.parametrize("u, motion", [([0.1, 0.2], "away from"), ([0.0, 0.0], "along")])
+def test_degenerate_start_is_reported_as_no_impact(engine, u, motion):
+    if motion == "along":  # tangential: the tip velocity is horizontal (v_By = 0)
+        q = [math.radians(-70), math.radians(-60)]
+        u = [1.0, -math.cos(q[0]) / math.cos(q[1])]
+        scene = impactgen.load_scene(PAPER, overrides={"initial.q": q, "initial.u": u})
+    else:
+        scene = impactgen.load_scene(PAPER, overrides={"initial.u": u})
+    result = impactgen.simulate(scene, engine=engine)
+    assert result.status == "no-impact" and "no impact" in result.message
+    assert result.impacts == [] and result.summary["delta_r"] == 0.0
+
+
 def test_later_impacts_start_again_on_the_original_surface():
     scene = impactgen.load_scene(PAPER, overrides={"solver.t_end": 0.2})
     result = impactgen.simulate(scene)

@@ -130,7 +130,26 @@ class CvodeSession:
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
-        return text or "CVODE failed without a message"
+        return likely_cause(text or "CVODE failed without a message")
+
+
+def likely_cause(message: str) -> str:
+    """Add to a CVODE message what usually causes it and what to try."""
+    lower = message.lower()
+    if "max_steps" in lower:
+        hint = ("the phase needs more steps than allowed: raise solver.max_steps, loosen solver.rtol, "
+                "or use method = \"bdf\" if stiff friction (a small contact.friction_eps) is the cause")
+    elif "error test failed" in lower or "convergence test failed" in lower or "convfail" in lower:
+        hint = ("the problem is too stiff or not smooth enough here for these tolerances: use "
+                "method = \"bdf\", a larger contact.friction_eps, or a looser solver.rtol")
+    elif "right-hand side" in lower or "rhs" in lower or "repeated recoverable" in lower:
+        hint = ("the right-hand side stopped being finite: check for extreme parameters "
+                "(moduli, radii, masses) or speeds")
+    elif "too much accuracy" in lower:
+        hint = "the tolerances are below what double precision resolves: raise solver.rtol or solver.atol"
+    else:
+        return message
+    return f"{message}; likely cause: {hint}"
 
 
 def default_atol(scene: Scene, nstate: int) -> np.ndarray:
@@ -184,8 +203,14 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     first = session.outputs(params, np.array([t]), y[None, :])[0]
     delta0, rate0 = first[out_index["delta"]], first[out_index["delta_rate"]]
     touching = delta0 >= -1e-12 * max(1.0, sum(scene.chain.length))
+    tip_speed = abs(first[out_index["v_Bx"]]) + abs(first[out_index["v_By"]])
+    if abs(rate0) <= 1e-12 * tip_speed:  # rounding of a tangential start
+        rate0 = 0.0
     phase = "elastic" if touching and rate0 > 0 else "free"
     t_end = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
+    if touching and rate0 <= 0 and scene.solver.t_end is None:
+        # a degenerate start: touching, but moving along or away from the surface
+        return _no_impact_at_start(scene, model, y, first, rate0, started)
 
     ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first[None, :]], [np.array([phase])]
     spans: list[PhaseSpan] = []
@@ -240,6 +265,17 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     stats = session.stats()
     stats.update(segments=len(spans), samples=n_samples, wall_s=time.perf_counter() - started)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
+
+
+def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: np.ndarray,
+                        rate0: float, started: float) -> SimulationResult:
+    motion = "along" if rate0 == 0 else "away from"
+    trajectory = Trajectory(np.array([0.0]), y[None, :], np.array(["free"]),
+                            {name: np.array([v]) for name, v in zip(model.output_names, first)})
+    return SimulationResult(scene, "c", "no-impact",
+                            f"the tip touches the surface but moves {motion} it (d(delta)/dt = "
+                            f"{rate0:.3g} m/s): no impact", trajectory, [], [],
+                            {"segments": 0, "samples": 1, "wall_s": time.perf_counter() - started})
 
 
 def _next_phase(phase: str, fired: list[str], plastic: bool, params, consts: ContactConstants) -> str:

@@ -327,8 +327,18 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     t = 0.0
     delta0, rate0 = model.delta_and_rate(y)
     touching = delta0 >= -1e-12 * max(1.0, sum(scene.chain.length))
+    _, _, v_x, v_y = model.chain.tip(y[:n], y[n:2 * n])
+    if abs(rate0) <= 1e-12 * (abs(v_x) + abs(v_y)):  # a tangential start, up to rounding
+        rate0 = 0.0
     phase = "elastic" if touching and rate0 > 0 else "free"
     t_final = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
+    if touching and rate0 <= 0 and scene.solver.t_end is None:  # touching, not approaching
+        rec = _Recorder()
+        rec.add(model, np.array([0.0]), y[None, :], "free")
+        trajectory = Trajectory(rec.t[0], rec.y[0], rec.phase[0], rec.outputs[0])
+        return SimulationResult(scene, engine, "no-impact", "the tip touches the surface but does not "
+                                f"approach it (d(delta)/dt = {rate0:.3g} m/s): no impact", trajectory,
+                                [], [], {"nsteps": 0, "nfev": 0, "njev": 0, "segments": 0, "samples": 1})
 
     rec = _Recorder()
     rec.add(model, np.array([t]), y[None, :], phase)
