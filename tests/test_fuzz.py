@@ -6,6 +6,7 @@ import contextlib
 import io
 import json
 import math
+import os
 import tempfile
 from pathlib import Path
 
@@ -122,11 +123,22 @@ def argument_lists(draw):
     return args
 
 
+@contextlib.contextmanager
+def _inside(folder: Path):
+    """Run with `folder` as the working directory: default outputs must not land in the repo."""
+    before = os.getcwd()
+    os.chdir(folder)
+    try:
+        yield
+    finally:
+        os.chdir(before)
+
+
 @settings(max_examples=400, deadline=None, suppress_health_check=list(HealthCheck))
 @given(argument_lists())
 def test_cli_ends_in_success_or_our_exit_codes(argv):
     out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+    with _inside(FUZZ_DIR), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = cli.main(argv)
     assert code in (0, 2, 3, 4), (argv, code, err.getvalue())
     stderr = err.getvalue()
