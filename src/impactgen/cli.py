@@ -6,6 +6,7 @@
     impactgen crosscheck [--links 1-6] [--random N] [--seed S] [--json]
     impactgen plot SCENE [--out DIR] [--set KEY=VALUE ...]
     impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
+    impactgen stability [--quick] [--json] [--out DIR]
 
 Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
 on stderr; --debug shows the traceback.
@@ -72,6 +73,12 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--parts", default="workprecision,rhs,scaling")
     bench.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    stab = sub.add_parser("stability", help="run the catalogue of stiff and extreme cases")
+    stab.add_argument("--quick", action="store_true", help="fewer cases and settings")
+    stab.add_argument("--json", action="store_true", help="print the rows as one JSON object")
+    stab.add_argument("--out", type=Path, default=Path("stability-results"))
+    stab.add_argument("--debug", action="store_true", help="show tracebacks")
+
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path)
     gen.add_argument("--out", type=Path)
@@ -93,6 +100,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _crosscheck(args)
         if args.command == "plot":
             return _plot(args)
+        if args.command == "stability":
+            from .stability import run_catalogue, write_report
+            rows = run_catalogue(args.quick)
+            path = write_report(rows, args.out, args.quick)
+            if args.json:
+                print(json.dumps({"report": str(path), "rows": rows}, default=lambda v: None))
+            else:
+                print(path)
+            return 0
         if args.command == "bench":
             from .bench import run_benchmarks
             parts = {p.strip() for p in args.parts.split(",") if p.strip()}

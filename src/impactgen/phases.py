@@ -112,6 +112,11 @@ class CvodeSession:
         fired = [events[i][0] for i in range(len(events)) if flag == lib.IG_ROOT and roots[i] != 0]
         return np.concatenate(ts), np.concatenate(ys), fired
 
+    def set_atol(self, atol: np.ndarray) -> None:
+        values = self.model.ffi.new("double[]", [float(a) for a in atol])
+        if self.model.lib.ig_solver_set_atol(self.solver, values) != 0:
+            raise SolverError(self._message())
+
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
         nout = len(model.output_names)
@@ -161,6 +166,28 @@ def default_atol(scene: Scene, nstate: int) -> np.ndarray:
     return atol
 
 
+def contact_atol(scene: Scene, consts: ContactConstants, free_atol: np.ndarray, y: np.ndarray,
+                 out: dict[str, float]) -> np.ndarray:
+    """Absolute tolerances inside one impact, scaled to it at its first instant.
+
+    The penetration is a difference of tip heights, so the angles must be resolved to a
+    fraction of it: a Hertz estimate delta_est = (15 m_eff v_n^2 / (16 E* R^1/2))^(2/5), with
+    the approach speed v_n and the effective mass m_eff ~ 2 T / |v_B|^2, sets their atol
+    (floored at 1e-15 rad, the double precision of a tip height of order 1 m). Speeds and
+    works get rtol times their size at contact. Never looser than the scene's atol."""
+    n, rtol = scene.n, scene.solver.rtol
+    v_tip2 = out["v_Bx"] ** 2 + out["v_By"] ** 2
+    m_total = sum(scene.chain.mass)
+    m_eff = min(2.0 * out["T"] / v_tip2, m_total) if v_tip2 > 0 else m_total
+    v_n = max(out["delta_rate"], 0.0)
+    delta_est = (15.0 * m_eff * v_n ** 2 / (16.0 * consts.E_star * math.sqrt(consts.R))) ** 0.4
+    atol = free_atol.copy()
+    atol[:n] = np.clip(1e-2 * rtol * delta_est / sum(scene.chain.length), 1e-15, free_atol[:n])
+    atol[n:2 * n] = np.minimum(free_atol[n:2 * n], max(rtol * float(np.max(np.abs(y[n:2 * n]))), 1e-300))
+    atol[2 * n:] = np.minimum(free_atol[2 * n:], max(rtol * out["T"], 1e-300))
+    return atol
+
+
 def surface_height(scene: Scene) -> float:
     if scene.surface_height is not None:
         return scene.surface_height
@@ -195,8 +222,13 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     rules = phase_rules(plastic)
     residual = RESIDUAL_LAWS[residual_law]
     params = fill_params(model, scene, consts)
-    session = CvodeSession(model, scene, default_atol(scene, model.nstate))
+    free_atol = default_atol(scene, model.nstate)
+    session = CvodeSession(model, scene, free_atol)
     out_index = {name: i for i, name in enumerate(model.output_names)}
+
+    def impact_begins(y_now: np.ndarray, out_now: np.ndarray) -> None:
+        named = {k: out_now[out_index[k]] for k in ("v_Bx", "v_By", "delta_rate", "T")}
+        session.set_atol(contact_atol(scene, consts, free_atol, y_now, named))
 
     y = np.concatenate([scene.q0, scene.u0, np.zeros(model.nstate - 2 * scene.n)])
     t = 0.0
@@ -218,6 +250,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     n_samples = 1
     if phase == "elastic":
         impacts.append(Impact(t_start=t, i_start=0))
+        impact_begins(y, first)
     status, message = "ok", ""
 
     while True:
@@ -244,6 +277,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             set_params(model, params, delta_m=0.0, delta_r=0.0, R_res=consts.R)
             impacts.append(Impact(t_start=t, i_start=n_samples - 1))
             impact = impacts[-1]
+            impact_begins(y, last)
         elif new_phase == "restitution" and phase in ("elastic", "elastoplastic"):
             delta_m, P_m = last[out_index["delta"]], last[out_index["F"]]
             delta_r = residual(delta_m, consts.delta_c) if plastic else 0.0
@@ -256,6 +290,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             impact.t_end, impact.i_end = t, n_samples - 1
             if scene.solver.t_end is None:
                 break
+            session.set_atol(free_atol)
         phase = new_phase
 
     trajectory = Trajectory(

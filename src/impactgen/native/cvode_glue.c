@@ -39,6 +39,8 @@ struct ig_solver {
     long segment_steps;
     ig_stats total;   /* counters of finished segments */
     double *jac;      /* row-major buffer for model_jacobian */
+    double rtol;
+    int atol_changed; /* ig_solver_set_atol was called: pass the tolerances to CVODE */
     int initialised;  /* CVodeInit has been called */
     int active;       /* a segment is under way */
     char message[512];
@@ -188,10 +190,25 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         return NULL;
     }
     s->max_steps = max_steps;
+    s->rtol = rtol;
     s->initialised = 1;
     /* Counters restart at every CVodeReInit: keep the totals in s->total. */
     memset(&s->total, 0, sizeof s->total);
     return s;
+}
+
+int ig_solver_set_atol(ig_solver *s, const double *atol)
+{
+    double *a = N_VGetArrayPointer(s->abstol);
+    for (int k = 0; k < MODEL_NSTATE; ++k) {
+        if (!(atol[k] > 0.0)) {
+            set_message(s, "ig_solver_set_atol: every entry must be positive");
+            return IG_ERR_USAGE;
+        }
+    }
+    for (int k = 0; k < MODEL_NSTATE; ++k) a[k] = atol[k];
+    s->atol_changed = 1;
+    return 0;
 }
 
 int ig_segment_start(ig_solver *s, const model_params *params, double t0, const double *y0,
@@ -217,6 +234,10 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
 
     memcpy(N_VGetArrayPointer(s->y), y0, sizeof(double) * MODEL_NSTATE);
     if (CVodeReInit(s->cvode, t0, s->y) != CV_SUCCESS) return IG_ERR_SOLVER;
+    if (s->atol_changed) {
+        if (CVodeSVtolerances(s->cvode, s->rtol, s->abstol) != CV_SUCCESS) return IG_ERR_SOLVER;
+        s->atol_changed = 0;
+    }
     if (CVodeRootInit(s->cvode, nevents, nevents > 0 ? roots : NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
     if (nevents > 0) {
         int dirs[MODEL_NEVENT];

@@ -39,6 +39,11 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
                          long max_steps, char *err, int errlen);
 void ig_solver_free(ig_solver *s);
 
+/* Replace the absolute tolerances (MODEL_NSTATE entries) from the next segment on: the phase
+ * machine tightens them inside a contact, where the penetration is a small difference of
+ * tip heights. Returns 0, or IG_ERR_USAGE for a non-positive entry. */
+int ig_solver_set_atol(ig_solver *s, const double *atol);
+
 /* Begin a segment at (t0, y0) under params; the solver keeps a pointer to params, which
  * must stay alive and unchanged until the segment ends. events/directions: nevents indices
  * into the model's event functions and their crossing directions (+1 rising, -1 falling,
