@@ -66,6 +66,11 @@ int main(void)
     const int bad_event[1] = {99};
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, bad_event, dirs, 1) == IG_ERR_USAGE, "bad event refused");
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 0.0, events, dirs, 2) == IG_ERR_USAGE, "t_stop <= t0 refused");
+    double contact_atol[MODEL_NSTATE];
+    for (int k = 0; k < MODEL_NSTATE; ++k) contact_atol[k] = -1.0;
+    EXPECT(ig_solver_set_atol(s, contact_atol) == IG_ERR_USAGE, "negative atol refused");
+    for (int k = 0; k < MODEL_NSTATE; ++k) contact_atol[k] = 1e-14;
+    EXPECT(ig_solver_set_atol(s, contact_atol) == 0, "contact atol accepted");
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started");
     int flag, fills = 0;
     while ((flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots)) == IG_BUFFER_FULL) {
