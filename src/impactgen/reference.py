@@ -186,13 +186,17 @@ class ReferenceModel:
 
     def rhs(self, t: float, y: np.ndarray, phase: str) -> np.ndarray:
         n = self.n
-        q, u = y[:n], y[n:2 * n]
-        _, y_B, v_Bx, v_By = self.chain.tip(q, u)
+        _, y_B, v_Bx, v_By = self.chain.tip(y[:n], y[n:2 * n])
         F = self.contact.normal_force(phase, self.contact.y_s - y_B)
         F_f = self.contact.friction(F, v_Bx)
-        du = self.chain.accelerations(q, u, F, F_f)
         works = [F * v_By] + ([F_f * v_Bx] if self.friction_state else [])
-        return np.concatenate([u, du, works])
+        return np.concatenate([self.chain_rates(t, y, F, F_f), works])
+
+    def chain_rates(self, t: float, y: np.ndarray, F: float, F_f: float) -> np.ndarray:
+        """dq/dt and du/dt of the chain under the tip forces F (normal) and F_f (friction)."""
+        n = self.n
+        q, u = y[:n], y[n:2 * n]
+        return np.concatenate([u, self.chain.accelerations(q, u, F, F_f)])
 
     def delta_and_rate(self, y: np.ndarray) -> tuple[float, float]:
         n = self.n

@@ -155,15 +155,8 @@ class PyDyModel(ReferenceModel):
         model.p = np.array(list(scene.chain.length) + list(scene.chain.mass) + [scene.chain.gravity])
         return model
 
-    def rhs(self, t: float, y: np.ndarray, phase: str) -> np.ndarray:
-        n = self.n
-        q, u = y[:n], y[n:2 * n]
-        _, y_B, v_Bx, v_By = self.chain.tip(q, u)
-        F = self.contact.normal_force(phase, self.contact.y_s - y_B)
-        F_f = self.contact.friction(F, v_Bx)
-        xdot = self.f(y[:2 * n], t, np.array([F, F_f]), self.p)
-        works = [F * v_By] + ([F_f * v_Bx] if self.friction_state else [])
-        return np.concatenate([xdot, works])
+    def chain_rates(self, t: float, y: np.ndarray, F: float, F_f: float) -> np.ndarray:
+        return self.f(y[:2 * self.n], t, np.array([F, F_f]), self.p)
 
 
 _pydy_cache: dict = {}
