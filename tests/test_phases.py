@@ -159,3 +159,10 @@ def test_results_outside_the_models_range_carry_warnings():
                                                   "rod.yield_strength": 2e8, "surface.yield_strength": 2e8})
     warnings = impactgen.simulate(hard).warnings
     assert any("contact radius" in w for w in warnings) and any("Jackson-Green fits" in w for w in warnings)
+
+
+def test_chattering_impacts_carry_a_warning():
+    early = impactgen.simulate(impactgen.load_scene(PAPER, overrides={"solver.t_end": 0.2}))
+    assert not any("chattering" in w for w in early.warnings)
+    settling = impactgen.simulate(impactgen.load_scene(PAPER, overrides={"solver.t_end": 1.0}))
+    assert any("chattering" in w and "sustained-contact" in w for w in settling.warnings)

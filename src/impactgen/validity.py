@@ -6,7 +6,10 @@ Checked per impact from what was recorded at maximum compression:
 - delta_max beyond 110 delta_c: outside the range of the finite-element results that the
   Jackson-Green fits were made from;
 - delta_max < delta_c: the elastic limit was never reached, so the impact was purely
-  Hertzian (delta_r = 0), which may not be what a plastic-impact study expects.
+  Hertzian (delta_r = 0), which may not be what a plastic-impact study expects;
+- chattering: a flight between two impacts shorter than twice the contact time before it.
+  The tip is settling onto the surface. Without a sustained-contact phase the sequence of
+  ever shorter impacts is not resolved reliably (its count depends on the tolerances).
 """
 from __future__ import annotations
 
@@ -22,23 +25,52 @@ def contact_radius(delta: float, R: float, delta_c: float, B: float) -> float:
     return math.sqrt(R * delta * (delta / (YIELD_ONSET * delta_c)) ** B)
 
 
+CHATTER_RATIO = 2.0  # flight shorter than this many contact times
+
+
+def chattering_warning(impacts) -> list[str]:
+    for k in range(len(impacts) - 1):
+        a, b = impacts[k], impacts[k + 1]
+        if a.t_end is None:
+            continue
+        if b.t_start - a.t_end < CHATTER_RATIO * (a.t_end - a.t_start):
+            return [f"chattering from impact {k + 1} on (t = {a.t_end:.4g} s): flights shorter than "
+                    f"{CHATTER_RATIO:g} contact times; the tip is settling onto the surface, and "
+                    "without a sustained-contact phase the later impacts are not resolved reliably"]
+    return []
+
+
 def validity_warnings(scene: Scene, impacts) -> list[str]:
+    """One warning per kind of trouble, naming the impacts it concerns."""
+    chatter = chattering_warning(impacts)
     if scene.contact.model != "three-phase" or not impacts:
-        return []
+        return chatter
     c = contact_constants(scene)
-    warnings = []
+    found: dict[str, list[tuple[int, str]]] = {}
     for k, impact in enumerate(impacts, start=1):
         w = impact.delta_m / c.delta_c
-        where = f"impact {k}" if len(impacts) > 1 else "the impact"
         if impact.delta_m >= YIELD_ONSET * c.delta_c:
             a = contact_radius(impact.delta_m, c.R, c.delta_c, c.B)
             if a >= c.R:
-                warnings.append(f"{where}: contact radius a = {a:.3g} m reaches the tip radius "
-                                f"{c.R:.3g} m; Hertz and Jackson-Green assume a << R")
+                found.setdefault("radius", []).append(
+                    (k, f"contact radius a = {a:.3g} m reaches the tip radius {c.R:.3g} m; "
+                        "Hertz and Jackson-Green assume a << R"))
         if w > JACKSON_GREEN_MAX_W:
-            warnings.append(f"{where}: delta_max = {w:.3g} delta_c, beyond the {JACKSON_GREEN_MAX_W:g} "
-                            "delta_c that the Jackson-Green fits cover")
+            found.setdefault("range", []).append(
+                (k, f"delta_max = {w:.3g} delta_c, beyond the {JACKSON_GREEN_MAX_W:g} delta_c "
+                    "that the Jackson-Green fits cover"))
         if 0 < w < 1:
-            warnings.append(f"{where}: the elastic limit was never reached (delta_max = {w:.3g} "
-                            "delta_c): a purely Hertzian impact, delta_r = 0")
-    return warnings
+            found.setdefault("elastic", []).append(
+                (k, f"the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
+                    "a purely Hertzian impact, delta_r = 0"))
+    warnings = []
+    for items in found.values():
+        first, text = items[0]
+        if len(impacts) == 1:
+            warnings.append(f"the impact: {text}")
+        elif len(items) == 1:
+            warnings.append(f"impact {first}: {text}")
+        else:
+            warnings.append(f"{len(items)} of {len(impacts)} impacts, from impact {first} on "
+                            f"(first: {text})")
+    return warnings + chatter
