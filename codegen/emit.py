@@ -16,7 +16,6 @@ import jinja2
 import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
-from . import contact as law
 from .expressions import PHASES, ModelExpressions, ModelSpec, assemble_model
 
 PHASE_CODES = {name: code for code, name in enumerate(PHASES)}
@@ -247,4 +246,4 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
     )
 
 
-__all__ = ["GeneratedModel", "generate_model", "ccode", "ModelCPrinter", "law"]
+__all__ = ["GeneratedModel", "generate_model", "ccode", "ModelCPrinter"]

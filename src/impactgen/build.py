@@ -213,7 +213,8 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
         work = Path(tempfile.mkdtemp(prefix=f"{key}.tmp-", dir=root))
         so = _compile(gen, sundials, module_name, work)
         library = so.name
-        shutil.copy2(so, work / library) if so.parent != work else None
+        if so.parent != work:  # keep the library inside the entry it belongs to
+            shutil.copy2(so, work / library)
         meta = {
             "spec": json.loads(spec.to_json()),
             "module": module_name,

@@ -92,7 +92,7 @@ def measure(contender: Contender, name: str, scene: Scene, rtol: float, truth: T
             settings: Settings) -> Run:
     run = Run(name, contender.name, contender.family, rtol, "ok")
     times = []
-    for k in range(settings.repeats):
+    for _ in range(settings.repeats):
         started = time.perf_counter()
         try:
             result = contender.run(scene, rtol, settings.budget)
