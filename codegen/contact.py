@@ -19,6 +19,7 @@ delta_r = sm.Symbol("delta_r", nonnegative=True)  # permanent deformation (set a
 R_res = sm.Symbol("R_res", positive=True)  # unloading radius (set at max compression)
 mu = sm.Symbol("mu", nonnegative=True)  # friction coefficient
 eps = sm.Symbol("eps", positive=True)  # regularization speed of the friction sign
+slip = sm.Symbol("slip")  # exact Coulomb: +1 or -1 while slipping, 0 while stuck (phase machine)
 v_Bx = sm.Symbol("v_Bx")  # tangential tip velocity
 
 YIELD_ONSET = sm.Rational(19, 10)  # phase I ends at delta = 1.9 delta_c
@@ -64,6 +65,6 @@ def friction_sign(v: sm.Expr = v_Bx) -> sm.Expr:
     return v / sm.sqrt(v ** 2 + eps ** 2)
 
 
-def friction_force(normal_force: sm.Expr, v: sm.Expr = v_Bx) -> sm.Expr:
-    """Eq. 14 with the regularized sign: F_f = -mu |F| s(v_Bx), along x."""
-    return -mu * normal_force * friction_sign(v)
+def friction_force(normal_force: sm.Expr, sign: sm.Expr) -> sm.Expr:
+    """Eq. 14: F_f = -mu |F| s, along x, with s the (regularized or exact) sign of v_Bx."""
+    return -mu * normal_force * sign

@@ -146,19 +146,31 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
     M = chain.mass_matrix
     kane = c_block([(f"M[{i * n + j}]", t(M[i, j])) for i in range(n) for j in range(i + 1)]
                    + [(f"f[{i}]", t(model.forcing[i])) for i in range(n)], "kin")
-    friction = c_block([("F_f", model.friction)], "fr") if model.friction is not None else None
+    friction = None
+    if model.friction is not None:  # F_f = -mu F s, with s kept by name for sustained contact
+        s_f = sm.Symbol("s")
+        friction = c_block([("s", model.friction_sign),
+                            ("F_f", model.friction.subs(model.friction_sign, s_f))], "fr")
+    tip_jacobian = c_block([(r.name, t(r.expr)) for r in model.tip_jacobian
+                            if spec.has_friction or not r.name.startswith("Jx")], "tj")
+    tip_jacobian_x = c_block([(r.name, t(r.expr)) for r in model.tip_jacobian
+                              if r.name.startswith("Jx") or r.name == "Jdot_u[0]"], "tj")
     rhs_blocks = [rhs_tip, kane] + ([friction] if friction else [])
-    works = [(f"ydot[{2 * n + k}]", ccode(w.expr), w.doc) for k, w in enumerate(model.works)]
+    if spec.constrained:
+        rhs_blocks += [tip_jacobian]
+    found = {sm.Symbol(k): sm.Symbol(f"c.{k}") for k in ("F", "F_f", "v_Bx", "v_By")}  # tip_forces c
+    works = [(f"ydot[{2 * n + k}]", ccode(w.expr.xreplace(found)), w.doc) for k, w in enumerate(model.works)]
 
     # Events: only delta and its rate are needed.
     ev_tip = tip_block(["delta", "delta_rate"])
     events = [{"name": e.name.upper(), "doc": e.doc, "expr": ccode(e.expr)} for e in model.events]
+    event_forces = [name for name in ("F", "F_f", "v_Bx") if any(_mentions(e["expr"], name) for e in events)]
 
     # Outputs: every tip quantity, the forces, the energies.
     out_tip = tip_block([v.name for v in model.tip])
     tip_names = {v.name for v in model.tip} | {"F", "F_f"}
     energies = c_block([(o.name, t(o.expr)) for o in model.outputs if o.name not in tip_names], "en")
-    out_blocks = [out_tip, energies] + ([friction] if friction else [])
+    out_blocks = [out_tip, energies] + ([friction] if friction and not spec.constrained else [])
 
     force_cases = []
     slopes = dict(model.jacobian.force_slopes) if model.jacobian else {}
@@ -199,6 +211,10 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
         "rhs_tip": rhs_tip,
         "kane": kane,
         "friction": friction,
+        "constrained": spec.constrained,
+        "tip_jacobian": tip_jacobian,
+        "tip_jacobian_x": tip_jacobian_x,
+        "event_forces": event_forces,
         "works": works,
         "events_kernel": _kernel(model, [ev_tip], [e["expr"] for e in events]),
         "ev_tip": ev_tip,

@@ -17,8 +17,10 @@ import sympy as sm
 from . import contact as law
 from .mechanics import ChainEquations, derive_chain
 
-# Phases of MODEL.md section 4, as the C enum values.
-PHASES = ("free", "elastic", "elastoplastic", "restitution")
+# Phases of MODEL.md section 4, as the C enum values, and the sustained contact that ends a
+# chattering sequence of impacts (the tip held on the surface by a constraint force).
+PHASES = ("free", "elastic", "elastoplastic", "restitution", "sustained")
+FRICTION_KINDS = ("none", "regularized", "coulomb")
 
 y_s = sm.Symbol("y_s")  # surface height
 delta_m = sm.Symbol("delta_m", nonnegative=True)  # maximum compression so far
@@ -33,20 +35,30 @@ class ModelSpec:
 
     links: int
     contact_model: str = "three-phase"  # "three-phase" | "hertz"
-    friction: str = "regularized"  # "none" | "regularized"
+    friction: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip)
     jacobian: bool = False  # emit the analytic Jacobian (for BDF)
+    sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
 
     def __post_init__(self) -> None:
         if self.links < 1:
             raise ValueError("links must be >= 1")
         if self.contact_model not in ("three-phase", "hertz"):
             raise ValueError(f"unknown contact model {self.contact_model!r}")
-        if self.friction not in ("none", "regularized"):
+        if self.friction not in FRICTION_KINDS:
             raise ValueError(f"unknown friction kind {self.friction!r}")
 
     @property
     def has_friction(self) -> bool:
         return self.friction != "none"
+
+    @property
+    def coulomb(self) -> bool:
+        return self.friction == "coulomb"
+
+    @property
+    def constrained(self) -> bool:
+        """Whether some phase holds a tip velocity by a constraint force (stick, sustained)."""
+        return self.coulomb or self.sustained
 
     @property
     def plastic(self) -> bool:
@@ -55,7 +67,8 @@ class ModelSpec:
     @property
     def slug(self) -> str:
         """A short readable name, e.g. 'chain2-three-phase-regularized'."""
-        return f"chain{self.links}-{self.contact_model}-{self.friction}" + ("-jacobian" if self.jacobian else "")
+        return (f"chain{self.links}-{self.contact_model}-{self.friction}"
+                + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else ""))
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)
@@ -110,7 +123,9 @@ class ModelExpressions:
     forcing: sm.Matrix  # the chain's forcing, with F_f = 0 when friction is pruned
     tip: tuple[Named, ...]  # x_B, y_B, v_Bx, v_By, delta, delta_rate
     force_cases: tuple[ForceCase, ...]
-    friction: sm.Expr | None  # F_f in terms of F and v_Bx
+    friction: sm.Expr | None  # F_f in terms of F and v_Bx (and slip, for exact Coulomb)
+    friction_sign: sm.Expr | None  # s of F_f = -mu F s: regularized sign of v_Bx, or slip
+    tip_jacobian: tuple[Named, ...]  # v_B = J_B u: rows Jx, Jy and the terms Jdot u
     events: tuple[Named, ...]
     outputs: tuple[Named, ...]
     works: tuple[Named, ...]  # power of each contact force: integrated as extra states
@@ -119,7 +134,9 @@ class ModelExpressions:
 
     @property
     def phases(self) -> tuple[str, ...]:
-        return PHASES if self.spec.plastic else tuple(p for p in PHASES if p != "elastoplastic")
+        left_out = ({"elastoplastic"} if not self.spec.plastic else set()) | (
+            {"sustained"} if not self.spec.sustained else set())
+        return tuple(p for p in PHASES if p not in left_out)
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -141,6 +158,7 @@ PARAM_DOCS = {
     "R_res": "unloading radius, m (set at maximum compression)",
     "mu": "friction coefficient",
     "eps": "regularization speed of the friction sign, m/s",
+    "slip": "exact Coulomb: +1 or -1 while the tip slips that way, 0 while it sticks",
 }
 
 
@@ -174,7 +192,10 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
         cases.append(ForceCase("restitution", sm.StrictGreaterThan(delta, 0), _single(law.hertz_force()),
                                "Hertz elastic restitution (Eq. 9 unloading)"))
 
-    friction = law.friction_force(s.F, TIP["v_Bx"]) if spec.has_friction else None
+    sign = None
+    if spec.has_friction:
+        sign = law.slip if spec.coulomb else law.friction_sign(TIP["v_Bx"])
+    friction = law.friction_force(s.F, sign) if sign is not None else None
 
     d, d_rate = TIP["delta"], TIP["delta_rate"]
     events = [
@@ -187,6 +208,14 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
             Named("separation", d - law.delta_r, "delta = delta_r: the tip leaves the dented surface"),
         ]
     events.append(Named("passes_delta_m", d - delta_m, "delta = delta_m: reloading passes the maximum"))
+    if spec.coulomb:
+        events += [
+            Named("slip_stops", TIP["v_Bx"], "v_Bx = 0: the slipping tip stops"),
+            Named("slip_backward", law.mu * s.F - s.F_f, "F_f = mu F: the stuck tip starts to slip along -x"),
+            Named("slip_forward", law.mu * s.F + s.F_f, "F_f = -mu F: the stuck tip starts to slip along +x"),
+        ]
+    if spec.sustained:
+        events.append(Named("lift_off", s.F, "F = 0: the resting tip lifts off"))
 
     T = chain.kinetic_energy
     outputs = [Named(t.name, TIP[t.name], t.doc) for t in tip]
@@ -205,7 +234,7 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction or 0]:
         used |= sm.sympify(e).free_symbols
     order = ["g", "y_s", "E_star", "R", "delta_c", "P_c", "C_j", "B", "delta_m", "delta_r",
-             "R_res", "mu", "eps"]
+             "R_res", "mu", "eps", "slip"]
     names = {str(x) for x in used} | {"g", "y_s"}
     params = tuple((f"L{i}", f"length of link {i}, m") for i in range(1, spec.links + 1))
     params += tuple((f"m{i}", f"mass of link {i}, kg") for i in range(1, spec.links + 1))
@@ -213,8 +242,21 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
 
     forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
     jacobian = _jacobian(chain, forcing, tuple(cases), friction, tuple(works)) if spec.jacobian else None
-    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction, tuple(events),
+    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction, sign,
+                            _tip_jacobian(chain) if spec.constrained else (), tuple(events),
                             tuple(outputs), tuple(works), params, jacobian)
+
+
+def _tip_jacobian(chain: ChainEquations) -> tuple[Named, ...]:
+    """v_B = J_B u and dv_B/dt = J_B du/dt + (dJ_B/dt) u: what a constraint on v_B needs.
+    A tip force (F_x, F_y) enters Kane's equations as J_B^T (F_x, F_y)."""
+    s = chain.symbols
+    rows = []
+    for k, (axis, v) in enumerate(zip("xy", chain.tip_velocity)):
+        rows += [Named(f"J{axis}[{i}]", v.diff(u), f"dv_B{axis}/du{i + 1}") for i, u in enumerate(s.u)]
+        rows.append(Named(f"Jdot_u[{k}]", sum(v.diff(q) * u for q, u in zip(s.q, s.u)),
+                          f"(dJ_B{axis}/dt) u"))
+    return tuple(rows)
 
 
 def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase, ...],

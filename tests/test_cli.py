@@ -52,7 +52,7 @@ def test_links_generates_and_compiles(tmp_path):
     (["--links", "0"], 2, "--links"),
     (["--links", "three"], 2, "invalid int"),
     (["frobnicate"], 2, "invalid choice"),
-    (["run", str(PAPER), "--set", "contact.friction_mode=coulomb"], 2, "coulomb"),
+    (["run", str(PAPER), "--set", "contact.friction_mode=sticky"], 2, "coulomb"),
 ])
 def test_bad_input_exits_2_with_one_line(args, code, words):
     res = impactgen(*args)

@@ -137,9 +137,14 @@ static double normal_force_slope(double delta, const model_params *p)
     }
 }
 
-int model_rhs(double t, const double *y, double *ydot, const model_params *p)
+/* The tip's motion and the contact forces on it, as one evaluation found them. */
+typedef struct {
+    double delta, v_By, F, v_Bx, F_f;
+} tip_forces;
+
+/* du/dt from Kane's equations M du/dt = f. */
+static int accelerations(const double *y, const model_params *p, double *udot, tip_forces *c)
 {
-    (void)t;
     const double q1 = y[0];
     const double q2 = y[1];
     const double q3 = y[2];
@@ -173,7 +178,8 @@ int model_rhs(double t, const double *y, double *ydot, const model_params *p)
 
     /* contact forces */
     const double F = model_normal_force(delta, p);
-    const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+    const double s = v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+    const double F_f = -F*mu*s;
 
     /* Kane's equations M du/dt = f (lower triangle of M) */
     double M[9];
@@ -212,14 +218,26 @@ int model_rhs(double t, const double *y, double *ydot, const model_params *p)
 
     if (cholesky_factor(M)) return -1;
     cholesky_solve(M, f);
+    for (int i = 0; i < 3; ++i) udot[i] = f[i];
+    c->delta = delta;
+    c->v_By = v_By;
+    c->F = F;
+    c->v_Bx = v_Bx;
+    c->F_f = F_f;
+    return 0;
+}
+
+int model_rhs(double t, const double *y, double *ydot, const model_params *p)
+{
+    (void)t;
+    tip_forces c;
+    const int status = accelerations(y, p, ydot + 3, &c);
+    if (status) return status;
     ydot[0] = y[3];
     ydot[1] = y[4];
     ydot[2] = y[5];
-    ydot[3] = f[0];
-    ydot[4] = f[1];
-    ydot[5] = f[2];
-    ydot[6] = F*v_By;  /* power of the normal force, W */
-    ydot[7] = F_f*v_Bx;  /* power of the friction force, W */
+    ydot[6] = c.F*c.v_By;  /* power of the normal force, W */
+    ydot[7] = c.F_f*c.v_Bx;  /* power of the friction force, W */
     for (int k = 0; k < MODEL_NSTATE; ++k) {
         if (!isfinite(ydot[k])) return 1;
     }
@@ -301,7 +319,8 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double delta_rate = -tip7;
 
     const double F = model_normal_force(delta, p);
-    const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+    const double s = v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+    const double F_f = -F*mu*s;
 
     const double en0 = (L1*L1)*(u1*u1);
     const double en1 = (1.0/6.0)*en0*m1;
@@ -371,7 +390,8 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
 
     const double F = model_normal_force(delta, p);
     const double dF = normal_force_slope(delta, p);
-    const double F_f = -F*mu*v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+    const double s = v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
+    const double F_f = -F*mu*s;
 
     double M[9];
     double f[3];

@@ -11,11 +11,9 @@ ENGINES = ("c", "reference")
 
 def model_spec(scene: Scene) -> ModelSpec:
     """The structure of the generated C that `scene` needs (numbers stay parameters)."""
-    if scene.contact.friction > 0 and scene.contact.friction_mode == "coulomb":
-        raise SceneError("contact.friction_mode", "'coulomb' (exact stick-slip) is not "
-                         "available yet; use 'regularized' with a small friction_eps")
-    friction = "regularized" if scene.contact.friction > 0 else "none"
-    return ModelSpec(scene.n, scene.contact.model, friction, scene.solver.jacobian == "analytic")
+    friction = scene.contact.friction_mode if scene.contact.friction > 0 else "none"
+    sustained = scene.solver.t_end is not None and scene.solver.sustained_contact
+    return ModelSpec(scene.n, scene.contact.model, friction, scene.solver.jacobian == "analytic", sustained)
 
 
 def simulate(scene: Scene, engine: str = "c", **options) -> SimulationResult:

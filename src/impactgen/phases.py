@@ -9,6 +9,14 @@ delta_r, R_res) and re-initialises the integrator, since the force law changes.
     elastic --max_compression--> restitution             restitution --separation--> free
     restitution --rate rises--> reloading --rate falls--> restitution
     reloading --passes delta_m--> elastic or elastoplastic (the curve it left)
+    elastic/elastoplastic --max_compression, impacts chattering--> sustained --lift_off--> free
+
+Sustained contact (scenes run to a time): when a flight is chattering (validity.chattering), the next impact does not rebound at its maximum compression; the tip
+is held at that depth by a constraint force F >= 0 until F falls to 0 (lift-off). The
+elastic energy stored in the dent stays in W_normal as a loss. After lift-off the surface
+level is the tip's height there, so later impacts start from delta = 0.
+
+With exact Coulomb friction, a stick-slip state (stick_slip.py) runs beside the phase.
 """
 from __future__ import annotations
 
@@ -25,6 +33,10 @@ from .contact_constants import (RESIDUAL_LAWS, YIELD_ONSET, ContactConstants, co
 from .errors import SolverError
 from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
+from .stick_slip import ENDS as SLIP_ENDS
+from .stick_slip import LABEL as SLIP_LABEL
+from .stick_slip import slip_after, slip_at_contact
+from .validity import chattering
 
 RISING, FALLING = 1, -1
 LAW_CODE = {name: code for code, name in enumerate(PHASES)}  # params.phase of each force law
@@ -47,6 +59,7 @@ def phase_rules(plastic: bool) -> dict[str, PhaseRule]:
         "elastoplastic": PhaseRule("elastoplastic", (("max_compression", FALLING),)),
         "restitution": PhaseRule("restitution", ((separation, FALLING), ("max_compression", RISING))),
         "reloading": PhaseRule("restitution", (("max_compression", FALLING), ("passes_delta_m", RISING))),
+        "sustained": PhaseRule("sustained", (("lift_off", FALLING),)),
     }
 
 
@@ -111,6 +124,10 @@ class CvodeSession:
             break
         fired = [events[i][0] for i in range(len(events)) if flag == lib.IG_ROOT and roots[i] != 0]
         return np.concatenate(ts), np.concatenate(ys), fired
+
+    def use_jacobian(self, analytic: bool) -> None:
+        if self.model.lib.ig_solver_use_jacobian(self.solver, 1 if analytic else 0) != 0:
+            raise SolverError(self._message())
 
     def set_atol(self, atol: np.ndarray) -> None:
         values = self.model.ffi.new("double[]", [float(a) for a in atol])
@@ -201,7 +218,7 @@ def fill_params(model: CompiledModel, scene: Scene, consts: ContactConstants):
     values.update(g=scene.chain.gravity, y_s=surface_height(scene), E_star=consts.E_star,
                   R=consts.R, delta_c=consts.delta_c, P_c=consts.P_c, C_j=consts.C_j, B=consts.B,
                   delta_m=0.0, delta_r=0.0, R_res=consts.R, mu=scene.contact.friction,
-                  eps=scene.contact.friction_eps)
+                  eps=scene.contact.friction_eps, slip=1.0)
     for name in model.param_names:
         setattr(params, name, values[name])
     return params
@@ -218,20 +235,38 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     """Simulate `scene` with the compiled `model` from phase to phase."""
     started = time.perf_counter()
     consts = contact_constants(scene)
-    plastic = model.spec.plastic
+    plastic, coulomb = model.spec.plastic, model.spec.coulomb
     rules = phase_rules(plastic)
     residual = RESIDUAL_LAWS[residual_law]
     params = fill_params(model, scene, consts)
     free_atol = default_atol(scene, model.nstate)
     session = CvodeSession(model, scene, free_atol)
     out_index = {name: i for i, name in enumerate(model.output_names)}
+    analytic = bool(model.spec.jacobian)
+
+    def output(y_now: np.ndarray, t_now: float, name: str, **temporary: float) -> float:
+        """One output at one state, with some parameters changed for the question only."""
+        saved = {k: getattr(params, k) for k in temporary}
+        for k, v in temporary.items():
+            setattr(params, k, v)
+        value = session.outputs(params, np.array([t_now]), y_now[None, :])[0][out_index[name]]
+        for k, v in saved.items():
+            setattr(params, k, v)
+        return float(value)
 
     def impact_begins(y_now: np.ndarray, out_now: np.ndarray) -> None:
         named = {k: out_now[out_index[k]] for k in ("v_Bx", "v_By", "delta_rate", "T")}
         session.set_atol(contact_atol(scene, consts, free_atol, y_now, named))
+        if coulomb:
+            v_Bx, tip_speed = named["v_Bx"], math.hypot(named["v_Bx"], named["v_By"])
+            F_now = out_now[out_index["F"]]
+            hold = output(y_now, t, "F_f", slip=0.0) if abs(v_Bx) <= 1e-12 * tip_speed else 0.0
+            params.slip = slip_at_contact(v_Bx, tip_speed, F_now, hold, scene.contact.friction)
 
     y = np.concatenate([scene.q0, scene.u0, np.zeros(model.nstate - 2 * scene.n)])
     t = 0.0
+    if coulomb:
+        params.slip = 1.0  # free flight: no friction, whatever the state
     first = session.outputs(params, np.array([t]), y[None, :])[0]
     delta0, rate0 = first[out_index["delta"]], first[out_index["delta_rate"]]
     touching = delta0 >= -1e-12 * max(1.0, sum(scene.chain.length))
@@ -259,21 +294,39 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
                               "shorten solver.t_end", phase, t)
         rule = rules[phase]
         params.phase = LAW_CODE[rule.law]
-        seg_t, seg_y, fired = session.segment(params, phase, t, y, t_end, rule.events)
+        events = rule.events
+        if coulomb and phase != "free":
+            events = events + SLIP_ENDS[params.slip]
+        if analytic:  # the analytic Jacobian does not know the constraint forces
+            session.use_jacobian(phase != "sustained" and not (coulomb and phase != "free" and params.slip == 0))
+        seg_t, seg_y, fired = session.segment(params, phase, t, y, t_end, events)
         seg_out = session.outputs(params, seg_t, seg_y)
+        friction_state = SLIP_LABEL[params.slip] if coulomb and phase != "free" else ""
+        if friction_state == "stick":
+            _check_stick(seg_out, out_index, scene.contact.friction, phase, float(seg_t[-1]))
         ts.append(seg_t), ys.append(seg_y), outs.append(seg_out)
         labels.append(np.full(len(seg_t), phase))
         n_samples += len(seg_t)
         t, y, last = float(seg_t[-1]), seg_y[-1].copy(), seg_out[-1]
-        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end"))
+        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
+                               friction_state))
         if not fired:
             if not impacts and scene.solver.t_end is None:
                 status = "no-impact"
                 message = f"no contact within solver.t_max = {scene.solver.t_max:g} s"
             break
-        new_phase = _next_phase(phase, fired, plastic, params, consts)
         impact = impacts[-1] if impacts else None
-        if new_phase == "elastic" and phase == "free":  # a new impact on the original surface
+        contact_fired = [e for e in fired if e not in ("slip_stops", "slip_backward", "slip_forward")]
+        if coulomb and len(contact_fired) < len(fired) and phase != "free":
+            old = params.slip
+            hold = output(y, t, "F_f", slip=0.0)
+            params.slip = slip_after(fired, old, last[out_index["F"]], hold, scene.contact.friction)
+            impact.stick_slip.append((t, SLIP_LABEL[old], SLIP_LABEL[params.slip]))
+        if not contact_fired:
+            continue  # only the friction state changed
+        fired = contact_fired
+        new_phase = _next_phase(phase, fired, plastic, params, consts)
+        if new_phase == "elastic" and phase == "free":  # a new impact
             set_params(model, params, delta_m=0.0, delta_r=0.0, R_res=consts.R)
             impacts.append(Impact(t_start=t, i_start=n_samples - 1))
             impact = impacts[-1]
@@ -284,12 +337,17 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star) if plastic else consts.R
             set_params(model, params, delta_m=delta_m, delta_r=delta_r, R_res=R_res)
             impact.delta_m, impact.P_m, impact.delta_r, impact.R_res = delta_m, P_m, delta_r, R_res
+            if model.spec.sustained and len(impacts) > 1 and chattering(impacts[-2], impacts[-1]) and \
+                    output(y, t, "F", phase=LAW_CODE["sustained"]) > 0.0:
+                new_phase = "sustained"  # hold the tip: no rebound into ever shorter flights
         if impact is not None and phase != "free":
             impact.switches.append((t, phase, new_phase))
         if new_phase == "free":
             impact.t_end, impact.i_end = t, n_samples - 1
             if scene.solver.t_end is None:
                 break
+            if phase == "sustained":  # the surface is where the tip left it
+                set_params(model, params, y_s=params.y_s - last[out_index["delta"]])
             session.set_atol(free_atol)
         phase = new_phase
 
@@ -300,6 +358,15 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     stats = session.stats()
     stats.update(segments=len(spans), samples=n_samples, wall_s=time.perf_counter() - started)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
+
+
+def _check_stick(out: np.ndarray, out_index: dict[str, int], mu: float, phase: str, t: float) -> None:
+    """A stuck tip never needs more than mu F: if it did, a slip event was missed."""
+    F, F_f = out[:, out_index["F"]], out[:, out_index["F_f"]]
+    excess = np.abs(F_f) - mu * F
+    if np.max(excess) > 1e-6 * mu * max(float(np.max(F)), 1e-300):
+        raise SolverError("the stuck tip needed a friction force beyond mu F and no slip event "
+                          "fired; tighten solver.rtol", phase, t)
 
 
 def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: np.ndarray,
@@ -317,6 +384,8 @@ def _next_phase(phase: str, fired: list[str], plastic: bool, params, consts: Con
     """The phase after `phase` when the events `fired` (MODEL section 4)."""
     if phase == "free":
         return "elastic"
+    if phase == "sustained":
+        return "free"  # lift-off
     if phase in ("elastic", "elastoplastic"):
         return "restitution" if "max_compression" in fired else "elastoplastic"
     if phase == "restitution":

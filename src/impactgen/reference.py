@@ -316,7 +316,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     if method not in METHODS and integrate is solve_ivp_segment:
         raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
     if scene.contact.friction > 0 and scene.contact.friction_mode == "coulomb":
-        raise SceneError("contact.friction_mode", "'coulomb' is not available yet; use 'regularized'")
+        raise SceneError("contact.friction_mode", "the reference engine has no exact Coulomb mode; "
+                         "compare the C engine's 'coulomb' with 'regularized' at a small friction_eps")
     started = time.perf_counter()
     model = model or ReferenceModel.from_scene(scene)
     n = scene.n

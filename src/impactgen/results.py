@@ -18,13 +18,17 @@ from .scene import Scene
 
 @dataclass
 class PhaseSpan:
-    phase: str  # "free", "elastic", "elastoplastic", "restitution", "reloading"
+    phase: str  # "free", "elastic", "elastoplastic", "restitution", "reloading", "sustained"
     t0: float
     t1: float
     ended_by: str  # the event that ended it, or "t_end"
+    friction: str = ""  # exact Coulomb friction: "slip+", "slip-" or "stick" during the span
 
     def to_dict(self) -> dict[str, Any]:
-        return {"phase": self.phase, "t0": self.t0, "t1": self.t1, "ended_by": self.ended_by}
+        out = {"phase": self.phase, "t0": self.t0, "t1": self.t1, "ended_by": self.ended_by}
+        if self.friction:
+            out["friction"] = self.friction
+        return out
 
 
 @dataclass
@@ -40,6 +44,7 @@ class Impact:
     delta_r: float = 0.0
     R_res: float = 0.0
     switches: list[tuple[float, str, str]] = field(default_factory=list)  # (t, from, to)
+    stick_slip: list[tuple[float, str, str]] = field(default_factory=list)  # exact Coulomb: (t, from, to)
 
 
 @dataclass
@@ -154,6 +159,7 @@ class SimulationResult:
             "t_contact": (self.t[i1] - self.t[i0]) if impact and impact.t_end is not None else 0.0,
             "t_impact": impact.t_start if impact else None,
             "switches": [{"t": t, "from": a, "to": b} for t, a, b in impact.switches] if impact else [],
+            "stick_slip": [{"t": t, "from": a, "to": b} for t, a, b in impact.stick_slip] if impact else [],
             "u_final": [float(v) for v in self.u[i1]],
             "q_final": [float(v) for v in self.q[i1]],
             "impacts": len(self.impacts),

@@ -67,6 +67,7 @@ class Solver:
     t_end: float | None  # None: stop at the first separation
     t_max: float  # longest free flight to wait for a first contact when t_end is None
     max_steps: int
+    sustained_contact: bool = True  # with t_end a time: hold the tip once impacts chatter
 
 
 @dataclass(frozen=True)
@@ -118,7 +119,7 @@ def _tolerance(v: float) -> str | None:
 class Key:
     """One scene key: its expected kind, default and check."""
 
-    kind: str  # "float", "int", "str", "name", "floats" (one number or a list of n), "list"
+    kind: str  # "float", "int", "str", "name", "bool", "floats" (one number or a list of n), "list"
     default: Any = _MISSING
     check: Check | None = None
     choices: tuple[str, ...] = ()
@@ -164,6 +165,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "t_end": Key("t_end", "separation", doc='"separation" or a time in s'),
         "t_max": Key("float", 10.0, _positive, doc="s; longest wait for a first contact"),
         "max_steps": Key("int", 500_000, lambda v: None if 0 < v <= 10**9 else "must lie in [1, 1e9]"),
+        "sustained_contact": Key("bool", True, doc="with t_end a time: rest the tip on the surface "
+                                                   "once impacts chatter"),
     },
 }
 
@@ -241,6 +244,10 @@ def _coerce(key: str, v: Any, spec: Key, n: int) -> Any:
         if isinstance(v, str):
             raise SceneError(key, f'expected "initial" or a number in m, got {v!r}')
         return _number(key, v)
+    if spec.kind == "bool":
+        if not isinstance(v, bool):
+            raise SceneError(key, f"expected true or false, got {v!r}")
+        return v
     if spec.kind == "t_end":
         if v == "separation":
             return None
@@ -335,7 +342,8 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     if jacobian == "auto":
         jacobian = "analytic" if method == "bdf" and n <= JACOBIAN_AUTO_MAX_LINKS else "difference"
     solver = Solver(method, jacobian, get("solver", "rtol"), get("solver", "atol"),
-                    get("solver", "t_end"), get("solver", "t_max"), get("solver", "max_steps"))
+                    get("solver", "t_end"), get("solver", "t_max"), get("solver", "max_steps"),
+                    get("solver", "sustained_contact"))
     scene = Scene(name, chain, rod, get("rod", "tip_radius"), surface,
                   get("surface", "height"), contact, q0, get("initial", "u", n), solver,
                   source=source)

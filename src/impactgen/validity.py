@@ -8,8 +8,9 @@ Checked per impact from what was recorded at maximum compression:
 - delta_max < delta_c: the elastic limit was never reached, so the impact was purely
   Hertzian (delta_r = 0), which may not be what a plastic-impact study expects;
 - chattering: a flight between two impacts shorter than twice the contact time before it.
-  The tip is settling onto the surface. Without a sustained-contact phase the sequence of
-  ever shorter impacts is not resolved reliably (its count depends on the tolerances).
+  The tip is settling onto the surface. Without the sustained-contact phase (switched off by
+  solver.sustained_contact = false) the sequence of ever shorter impacts is not resolved
+  reliably (its count depends on the tolerances).
 """
 from __future__ import annotations
 
@@ -28,12 +29,16 @@ def contact_radius(delta: float, R: float, delta_c: float, B: float) -> float:
 CHATTER_RATIO = 2.0  # flight shorter than this many contact times
 
 
+def chattering(before, now) -> bool:
+    """The flight between impacts `before` and `now` is shorter than CHATTER_RATIO times the
+    contact of `before`: the impacts are becoming a chattering sequence."""
+    return before.t_end is not None and now.t_start - before.t_end < CHATTER_RATIO * (before.t_end - before.t_start)
+
+
 def chattering_warning(impacts) -> list[str]:
     for k in range(len(impacts) - 1):
         a, b = impacts[k], impacts[k + 1]
-        if a.t_end is None:
-            continue
-        if b.t_start - a.t_end < CHATTER_RATIO * (a.t_end - a.t_start):
+        if chattering(a, b):
             return [f"chattering from impact {k + 1} on (t = {a.t_end:.4g} s): flights shorter than "
                     f"{CHATTER_RATIO:g} contact times; the tip is settling onto the surface, and "
                     "without a sustained-contact phase the later impacts are not resolved reliably"]
@@ -42,7 +47,8 @@ def chattering_warning(impacts) -> list[str]:
 
 def validity_warnings(scene: Scene, impacts) -> list[str]:
     """One warning per kind of trouble, naming the impacts it concerns."""
-    chatter = chattering_warning(impacts)
+    # with sustained contact the phase machine rests the tip instead: the phases say so
+    chatter = [] if scene.solver.t_end is not None and scene.solver.sustained_contact else chattering_warning(impacts)
     if scene.contact.model != "three-phase" or not impacts:
         return chatter
     c = contact_constants(scene)

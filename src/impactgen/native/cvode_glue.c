@@ -41,6 +41,7 @@ struct ig_solver {
     double *jac;      /* row-major buffer for model_jacobian */
     double rtol;
     int atol_changed; /* ig_solver_set_atol was called: pass the tolerances to CVODE */
+    int analytic_in_use; /* the analytic Jacobian is set (else CVODE's difference quotients) */
     int initialised;  /* CVodeInit has been called */
     int active;       /* a segment is under way */
     char message[512];
@@ -182,6 +183,7 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         s->jac = (double *)malloc(sizeof(double) * MODEL_NSTATE * MODEL_NSTATE);
         if (!s->jac) failed = "out of memory";
         else if (CVodeSetJacFn(s->cvode, jacobian) != CV_SUCCESS) failed = "CVodeSetJacFn failed";
+        else s->analytic_in_use = 1;
     }
 #endif
     if (failed) {
@@ -208,6 +210,22 @@ int ig_solver_set_atol(ig_solver *s, const double *atol)
     }
     for (int k = 0; k < MODEL_NSTATE; ++k) a[k] = atol[k];
     s->atol_changed = 1;
+    return 0;
+}
+
+int ig_solver_use_jacobian(ig_solver *s, int analytic)
+{
+    if (analytic == s->analytic_in_use) return 0;
+    if (analytic && !s->jac) {
+        set_message(s, "ig_solver_use_jacobian: the solver was created without the analytic Jacobian");
+        return IG_ERR_USAGE;
+    }
+#if MODEL_HAS_JACOBIAN
+    if (CVodeSetJacFn(s->cvode, analytic ? jacobian : NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
+#else
+    if (CVodeSetJacFn(s->cvode, NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
+#endif
+    s->analytic_in_use = analytic;
     return 0;
 }
 

@@ -44,6 +44,11 @@ void ig_solver_free(ig_solver *s);
  * tip heights. Returns 0, or IG_ERR_USAGE for a non-positive entry. */
 int ig_solver_set_atol(ig_solver *s, const double *atol);
 
+/* Use the analytic Jacobian (1) or CVODE's difference quotients (0) from now on: the phase
+ * machine switches to difference quotients where a constraint force (stick, sustained
+ * contact) changes the equations that the analytic Jacobian was derived from. */
+int ig_solver_use_jacobian(ig_solver *s, int analytic);
+
 /* Begin a segment at (t0, y0) under params; the solver keeps a pointer to params, which
  * must stay alive and unchanged until the segment ends. events/directions: nevents indices
  * into the model's event functions and their crossing directions (+1 rising, -1 falling,
