@@ -167,3 +167,13 @@ def test_chattering_impacts_carry_a_warning():
     settling = impactgen.simulate(impactgen.load_scene(PAPER, overrides={"solver.t_end": 1.0,
                                                                          "solver.sustained_contact": False}))
     assert any("chattering" in w and "sustained-contact" in w for w in settling.warnings)
+
+
+def test_an_impact_finer_than_the_tolerance_resolves_carries_a_warning():
+    gentle = {"initial.u": [-5e-5, -1e-4], "solver.rtol": 1e-8, "solver.atol": 1e-10}
+    warnings = impactgen.simulate(impactgen.load_scene(PAPER, overrides=gentle)).warnings
+    assert any("resolution" in w and "tighten solver.rtol" in w for w in warnings)
+    tight = {**gentle, "solver.rtol": 1e-12, "solver.atol": 1e-14}
+    result = impactgen.simulate(impactgen.load_scene(PAPER, overrides=tight))
+    assert not any("resolution" in w for w in result.warnings)
+    assert abs(result.summary["energy"]["residual"]) < 1e-5 * result.summary["T0"]

@@ -41,7 +41,18 @@ def test_random_scenes_cover_free_flight_hertz_and_no_friction(fast_reports):
     assert any(s.surface_height is not None for s in scenes)
     assert any(s.contact.model == "hertz" for s in scenes)
     assert any(s.contact.friction == 0 for s in scenes)
+    assert any(s.contact.friction > 0 and s.contact.friction_mode == "coulomb" for s in scenes)
     assert {s.n for s in scenes} >= {1, 2, 3, 4}
+
+
+def test_exact_coulomb_stick_and_slip_agree_between_engines():
+    scene = crosscheck.with_tolerance(impactgen.load_scene(PAPER, overrides={
+        "contact.friction": 2.0, "contact.friction_mode": "coulomb"}), 1e-11)
+    ref = impactgen.simulate(scene, engine="reference")
+    assert [p.friction for p in ref.phases] == ["slip-", "slip-", "slip-", "stick", "slip-"]
+    report = crosscheck.run_case(scene)  # the phase spans, with their stick-slip state, must match
+    for quantity, value in report.differences.items():
+        assert value < 1e-7, quantity
 
 
 def test_paper_case_agrees_to_1e_7_at_tight_tolerance():

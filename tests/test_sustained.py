@@ -81,3 +81,13 @@ def test_a_bar_comes_to_rest_in_compliant_contact_under_half_its_weight():
 
 def test_lift_off_ends_sustained_contact():
     assert _next_phase("sustained", ["lift_off"], True, None, None) == "free"
+
+
+def test_a_tip_that_never_separates_says_so():
+    from impactgen.crosscheck import random_scene
+    rng = np.random.default_rng(2026)
+    scenes = [random_scene(rng, int(rng.integers(1, 7)), f"random-{i}", 1e-9) for i in range(19)]
+    resting = scenes[18]  # a bar whose tip stays in contact (its random-scene t_max is 0.05 s)
+    result = impactgen.simulate(resting)
+    assert result.status == "ok" and "came to rest" in result.message
+    assert result.impacts[0].t_end is None and result.summary["t_contact"] == 0.0

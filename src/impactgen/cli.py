@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -140,6 +141,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("impactgen: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader (head, say) stopped reading: not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except SystemExit as exc:  # --help
         return exc.code if isinstance(exc.code, int) else 0
 
@@ -257,7 +261,11 @@ def format_summary(result) -> str:
     e = s["energy"]
     lines = [f"{result.scene.name} ({result.engine} engine): {result.status}"
              + (f", {result.message}" if result.message else "")]
-    lines.append("phases: " + ", ".join(f"{p.phase} [{p.t0:.4g}, {p.t1:.4g}] s" for p in result.phases))
+    spans = [f"{p.phase}{' (' + p.friction + ')' if p.friction else ''} [{p.t0:.4g}, {p.t1:.4g}] s"
+             for p in result.phases]
+    if len(spans) > 12:  # repeated impacts: the first and the last few
+        spans = spans[:4] + [f"... {len(spans) - 8} more ..."] + spans[-4:]
+    lines.append("phases: " + ", ".join(spans))
     if s["impacts"]:
         lines += [
             f"max deformation   delta_m = {s['delta_max']:.4g} m",
@@ -266,6 +274,11 @@ def format_summary(result) -> str:
             f"unloading radius  R_res   = {s['R_res']:.4g} m",
             f"impact duration           = {s['t_contact']:.4g} s",
         ]
+        if s["stick_slip"]:
+            lines.append("stick-slip        " + ", ".join(f"{w['from']} -> {w['to']} at {w['t']:.4g} s"
+                                                       for w in s["stick_slip"]))
+        if s["impacts"] > 1:
+            lines.append(f"impacts           {s['impacts']} (the summary is the first)")
     lines += [
         f"kinetic energy    T0 = {s['T0']:.6g} J, Tf = {s['Tf']:.6g} J, Delta T = {s['delta_T']:.4g} J",
         f"energy budget     W_normal = {e['W_normal']:.4g} J, W_friction = {e['W_friction']:.4g} J, "

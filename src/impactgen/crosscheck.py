@@ -26,8 +26,9 @@ QUANTITIES = ("u_final", "q_final", "delta_max", "delta_r", "delta_T", "t_contac
 # ----------------------------------------------------------------------------- scenes
 
 def random_scene(rng: np.random.Generator, n: int, name: str, rtol: float) -> Scene:
-    """A random chain approaching the surface: lengths, masses, materials, mu, angles,
-    speeds; half of them start in free flight a little above the surface."""
+    """A random chain approaching the surface: lengths, masses, materials, mu (regularized or
+    exact Coulomb), angles, speeds; half of them start in free flight a little above the
+    surface."""
     L = rng.uniform(0.3, 1.5, n)
     for _ in range(1000):  # angles and speeds with a clear approach (a link near -90 deg has none)
         q = np.radians(rng.uniform(-150.0, -30.0, n))
@@ -54,9 +55,11 @@ def random_scene(rng: np.random.Generator, n: int, name: str, rtol: float) -> Sc
                     "height": y_B - float(10 ** rng.uniform(-4, -2.5)) if free_flight else "initial"},
         "contact": {"model": "three-phase" if rng.random() < 0.8 else "hertz",
                     "friction": 0.0 if rng.random() < 0.25 else float(rng.uniform(0.05, 0.5)),
+                    "friction_mode": "coulomb" if rng.random() < 0.3 else "regularized",
                     "friction_eps": float(10 ** rng.uniform(-5, -3))},
         "initial": {"q": q.tolist(), "u": u.tolist()},
-        "solver": {"rtol": rtol, "atol": rtol * 1e-2},
+        # a tip that comes to rest without separating ends the comparison at t_max
+        "solver": {"rtol": rtol, "atol": rtol * 1e-2, "t_max": 0.05},
     }
     return scene_from_dict(raw, source=f"<random scene {name}>")
 
@@ -95,6 +98,12 @@ def _hermite_q(result: SimulationResult, t: np.ndarray) -> tuple[np.ndarray, np.
     return values, (ph[k] == ph[k + 1]) & (s[:, 0] >= 0) & (s[:, 0] <= 1)
 
 
+def _lasting(spans: list) -> list:
+    """The phase spans without those of zero length: a stick-slip event that one integrator
+    reports with a contact event, the other can report a rounding error later."""
+    return [p for p in spans if p.t1 - p.t0 > 1e-12 * max(abs(p.t1), 1e-300)]
+
+
 def compare(c: SimulationResult, ref: SimulationResult) -> dict[str, float]:
     """Largest relative difference per quantity (inf where the phase sequences differ).
     Vectors are compared in the max norm; delta_r against delta_max when it is ~0; Delta T
@@ -112,11 +121,12 @@ def compare(c: SimulationResult, ref: SimulationResult) -> dict[str, float]:
     }
     sa = [(s["from"], s["to"]) for s in a["switches"]]
     sb = [(s["from"], s["to"]) for s in b["switches"]]
-    if sa != sb or [p.phase for p in c.phases] != [p.phase for p in ref.phases]:
+    phases_a, phases_b = _lasting(c.phases), _lasting(ref.phases)
+    if sa != sb or [(p.phase, p.friction) for p in phases_a] != [(p.phase, p.friction) for p in phases_b]:
         out["switch_times"] = math.inf
     else:
-        times_a = np.array([p.t1 for p in c.phases])
-        times_b = np.array([p.t1 for p in ref.phases])
+        times_a = np.array([p.t1 for p in phases_a])
+        times_b = np.array([p.t1 for p in phases_b])
         out["switch_times"] = _rel(times_a, times_b, 1e-300) if len(times_b) else 0.0
     q_c, inside = _hermite_q(c, ref.t)
     out["trajectory_q"] = _rel(q_c[inside], ref.q[inside]) if inside.any() else 0.0

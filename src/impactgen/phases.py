@@ -35,7 +35,7 @@ from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
 from .stick_slip import ENDS as SLIP_ENDS
 from .stick_slip import LABEL as SLIP_LABEL
-from .stick_slip import slip_after, slip_at_contact
+from .stick_slip import slip_after, slip_at_contact, slip_when_stopped
 from .validity import chattering
 
 RISING, FALLING = 1, -1
@@ -294,6 +294,8 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
                               "shorten solver.t_end", phase, t)
         rule = rules[phase]
         params.phase = LAW_CODE[rule.law]
+        if coulomb and phase != "free" and params.slip != 0.0:
+            _slip_direction_check(params, session, out_index, y, t, scene.contact.friction, impacts[-1])
         events = rule.events
         if coulomb and phase != "free":
             events = events + SLIP_ENDS[params.slip]
@@ -311,9 +313,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
                                friction_state))
         if not fired:
-            if not impacts and scene.solver.t_end is None:
-                status = "no-impact"
-                message = f"no contact within solver.t_max = {scene.solver.t_max:g} s"
+            status, message = _end_without_event(scene, impacts, phase)
             break
         impact = impacts[-1] if impacts else None
         contact_fired = [e for e in fired if e not in ("slip_stops", "slip_backward", "slip_forward")]
@@ -358,6 +358,33 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     stats = session.stats()
     stats.update(segments=len(spans), samples=n_samples, wall_s=time.perf_counter() - started)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
+
+
+def _slip_direction_check(params, session: CvodeSession, out_index: dict[str, int], y: np.ndarray,
+                          t: float, mu: float, impact: Impact) -> None:
+    """A slip whose tip has stopped, or moves the other way, without its own event having
+    fired (it can coincide with a contact event: a single bar stops sliding exactly when it
+    stops penetrating) is decided as at a stop."""
+    here = session.outputs(params, np.array([t]), y[None, :])[0]
+    v_x, v_y = here[out_index["v_Bx"]], here[out_index["v_By"]]
+    if v_x * params.slip > 1e-9 * math.hypot(v_x, v_y):
+        return
+    old = params.slip
+    params.slip = 0.0
+    hold = session.outputs(params, np.array([t]), y[None, :])[0][out_index["F_f"]]
+    params.slip = slip_when_stopped(here[out_index["F"]], hold, mu)
+    if params.slip != old:
+        impact.stick_slip.append((t, SLIP_LABEL[old], SLIP_LABEL[params.slip]))
+
+
+def _end_without_event(scene: Scene, impacts: list[Impact], phase: str) -> tuple[str, str]:
+    """Status and message of a run that reached its end time rather than an event."""
+    if scene.solver.t_end is not None:
+        return "ok", ""
+    if not impacts:
+        return "no-impact", f"no contact within solver.t_max = {scene.solver.t_max:g} s"
+    return "ok", (f"no separation within solver.t_max = {scene.solver.t_max:g} s: the tip came to rest "
+                  f"on the surface (phase {phase!r}); the summary's impact has no end")
 
 
 def _check_stick(out: np.ndarray, out_index: dict[str, int], mu: float, phase: str, t: float) -> None:

@@ -70,6 +70,15 @@ class ChainModel:
         Q = -self.g * self.L * np.cos(q) * self.gravity_arm + self.L * (F * np.cos(q) - F_f * np.sin(q))
         return np.linalg.solve(self.mass_matrix(q), Q - velocity_terms)
 
+    def holding_force(self, q: np.ndarray, u: np.ndarray, F: float) -> float:
+        """The tangential tip force that keeps v_Bx = -sum L_i sin(q_i) u_i at zero: with
+        a_i = -L_i sin q_i, d(v_Bx)/dt = a . du/dt - sum L_i cos(q_i) u_i^2 = 0, and du/dt is
+        affine in the force F_f (its generalized force is a F_f)."""
+        a = -self.L * np.sin(q)
+        free = self.accelerations(q, u, F, 0.0)
+        per_newton = self.accelerations(q, u, F, 1.0) - free
+        return (np.sum(self.L * np.cos(q) * u ** 2) - a @ free) / (a @ per_newton)
+
     def tip(self, q: np.ndarray, u: np.ndarray) -> tuple[float, float, float, float]:
         """x_B, y_B, v_Bx, v_By (works on arrays of samples too, q of shape (n, N))."""
         L = self.L if q.ndim == 1 else self.L[:, None]
@@ -112,6 +121,8 @@ class Contact:
     eps: float
     y_s: float
     plastic: bool
+    exact_coulomb: bool = False
+    slip: float = 1.0  # exact Coulomb: +1 / -1 slipping along +x / -x, 0 stuck
     delta_m: float = 0.0
     delta_r: float = 0.0
     R_res: float = 0.0
@@ -128,7 +139,8 @@ class Contact:
                    P_c=4.0 / 3.0 * (R / E_star) ** 2 * p0 ** 3, C_j=C_j,
                    B=0.14 * math.exp(23 * weak.yield_strength / E_star),
                    mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
-                   plastic=scene.contact.model == "three-phase", R_res=R)
+                   plastic=scene.contact.model == "three-phase", R_res=R,
+                   exact_coulomb=scene.contact.friction_mode == "coulomb" and scene.contact.friction > 0)
 
     def hertz(self, delta: float, radius: float) -> float:
         return 4.0 / 3.0 * self.E_star * math.sqrt(radius) * delta ** 1.5 if delta > 0 else 0.0
@@ -152,7 +164,12 @@ class Contact:
         return 0.0
 
     def friction(self, F: float, v_Bx: float) -> float:
-        return -self.mu * F * v_Bx / math.sqrt(v_Bx ** 2 + self.eps ** 2) if self.mu > 0 else 0.0
+        """Sliding friction: the regularized sign of v_Bx, or exact Coulomb's fixed slip sign."""
+        if self.mu == 0:
+            return 0.0
+        if self.exact_coulomb:
+            return -self.mu * F * self.slip
+        return -self.mu * F * v_Bx / math.sqrt(v_Bx ** 2 + self.eps ** 2)
 
     def at_maximum_compression(self, delta_m: float, P_m: float) -> None:
         """Fix delta_m, delta_r (Eq. 12, clamped) and R_res (continuity at delta_m)."""
@@ -188,9 +205,17 @@ class ReferenceModel:
         n = self.n
         _, y_B, v_Bx, v_By = self.chain.tip(y[:n], y[n:2 * n])
         F = self.contact.normal_force(phase, self.contact.y_s - y_B)
-        F_f = self.contact.friction(F, v_Bx)
+        F_f = self.tangential_force(y, phase, F, v_Bx)
         works = [F * v_By] + ([F_f * v_Bx] if self.friction_state else [])
         return np.concatenate([self.chain_rates(t, y, F, F_f), works])
+
+    def stuck(self, phase: str) -> bool:
+        return self.contact.exact_coulomb and self.contact.slip == 0 and phase != "free"
+
+    def tangential_force(self, y: np.ndarray, phase: str, F: float, v_Bx: float) -> float:
+        if self.stuck(phase):
+            return self.chain.holding_force(y[:self.n], y[self.n:2 * self.n], F)
+        return self.contact.friction(F, v_Bx)
 
     def chain_rates(self, t: float, y: np.ndarray, F: float, F_f: float) -> np.ndarray:
         """dq/dt and du/dt of the chain under the tip forces F (normal) and F_f (friction)."""
@@ -211,7 +236,7 @@ class ReferenceModel:
         F = np.array([self.contact.normal_force(phase, d) for d in delta])
         out = {"x_B": x_B, "y_B": y_B, "v_Bx": v_Bx, "v_By": v_By, "delta": delta, "delta_rate": -v_By, "F": F}
         if self.friction_state:
-            out["F_f"] = np.array([self.contact.friction(f, v) for f, v in zip(F, v_Bx)])
+            out["F_f"] = np.array([self.tangential_force(yk, phase, f, v) for yk, f, v in zip(y, F, v_Bx)])
         T, V = self.chain.energies(q, u)
         out.update({f"T{i + 1}": T[i] for i in range(n)})
         out["T"], out["V"] = T.sum(0), V
@@ -229,7 +254,41 @@ def _event(fn, direction: int):
     return event
 
 
+FRICTION_EVENTS = ("slip_stops", "slip_backward", "slip_forward")
+SLIP_NAMES = {1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
+
+
+def _friction_events(model: ReferenceModel, phase: str) -> dict[str, object]:
+    """Exact Coulomb: a slip ends when v_Bx returns to 0, a stick when the holding force
+    leaves the cone |F_f| <= mu F."""
+    c, n = model.contact, model.n
+    if not c.exact_coulomb or phase == "free":
+        return {}
+    if c.slip != 0:
+        return {"slip_stops": _event(lambda t, y: model.chain.tip(y[:n], y[n:2 * n])[2], -int(c.slip))}
+
+    def cone(side: float):
+        def gap(t: float, y: np.ndarray) -> float:
+            F = c.normal_force(phase, model.delta_and_rate(y)[0])
+            return c.mu * F - side * model.chain.holding_force(y[:n], y[n:2 * n], F)
+        return gap
+    return {"slip_backward": _event(cone(+1.0), -1), "slip_forward": _event(cone(-1.0), -1)}
+
+
+def _slip_at_stop(model: ReferenceModel, y: np.ndarray, phase: str) -> float:
+    """Stick if the force holding the tip still lies strictly inside the cone, else slip
+    against it."""
+    n, c = model.n, model.contact
+    F = c.normal_force(phase, model.delta_and_rate(y)[0])
+    hold = model.chain.holding_force(y[:n], y[n:2 * n], F)
+    return 0.0 if abs(hold) < c.mu * F or hold == 0 else -math.copysign(1.0, hold)
+
+
 def _phase_events(model: ReferenceModel, phase: str) -> dict[str, object]:
+    return {**_contact_events(model, phase), **_friction_events(model, phase)}
+
+
+def _contact_events(model: ReferenceModel, phase: str) -> dict[str, object]:
     c = model.contact
     delta = lambda t, y: model.delta_and_rate(y)[0]  # noqa: E731
     rate = lambda t, y: model.delta_and_rate(y)[1]  # noqa: E731
@@ -307,6 +366,31 @@ class _Recorder:
         self.count += len(t)
 
 
+def _slip_direction_check(model: ReferenceModel, y: np.ndarray, phase: str, t: float, impact: Impact) -> None:
+    """A slip whose tip has stopped, or moves the other way, without its event (it can
+    coincide with a contact event: a single bar stops sliding exactly when it stops
+    penetrating) is decided as at a stop."""
+    c, n = model.contact, model.n
+    if not c.exact_coulomb or c.slip == 0:
+        return
+    _, _, v_x, v_y = model.chain.tip(y[:n], y[n:2 * n])
+    if v_x * c.slip > 1e-9 * math.hypot(v_x, v_y):
+        return
+    old, c.slip = c.slip, _slip_at_stop(model, y, phase)
+    if c.slip != old:
+        impact.stick_slip.append((t, SLIP_NAMES[old], SLIP_NAMES[c.slip]))
+
+
+def _begin_slip(model: ReferenceModel, y: np.ndarray) -> None:
+    """A contact begins slipping the way the tip moves (as at a stop if it does not)."""
+    if not model.contact.exact_coulomb:
+        return
+    n = model.n
+    _, _, v_x, v_y = model.chain.tip(y[:n], y[n:2 * n])
+    moving = abs(v_x) > 1e-12 * math.hypot(v_x, v_y)
+    model.contact.slip = math.copysign(1.0, v_x) if moving else _slip_at_stop(model, y, "elastic")
+
+
 def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
              atol: float | None = None, model: ReferenceModel | None = None,
              integrate=solve_ivp_segment, engine: str = "reference") -> SimulationResult:
@@ -315,9 +399,9 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     under the same phase loop."""
     if method not in METHODS and integrate is solve_ivp_segment:
         raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
-    if scene.contact.friction > 0 and scene.contact.friction_mode == "coulomb":
-        raise SceneError("contact.friction_mode", "the reference engine has no exact Coulomb mode; "
-                         "compare the C engine's 'coulomb' with 'regularized' at a small friction_eps")
+    if scene.solver.t_end is not None and scene.solver.sustained_contact:
+        raise SceneError("solver.sustained_contact", "the reference engine simulates every impact "
+                         "and has no sustained-contact phase: set it to false to compare the engines")
     started = time.perf_counter()
     model = model or ReferenceModel.from_scene(scene)
     n = scene.n
@@ -346,12 +430,16 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
                                 [], [], {"nsteps": 0, "nfev": 0, "njev": 0, "segments": 0, "samples": 1})
 
     rec = _Recorder()
+    if phase == "elastic":
+        _begin_slip(model, y)
     rec.add(model, np.array([t]), y[None, :], phase)
     spans: list[PhaseSpan] = []
     impacts: list[Impact] = [Impact(t_start=0.0, i_start=0)] if phase == "elastic" else []
     stats = {"nsteps": 0, "nfev": 0, "njev": 0}
     status, message = "ok", ""
     while True:
+        if impacts and phase != "free":
+            _slip_direction_check(model, y, phase, t, impacts[-1])
         seg = integrate(model, phase, t, y, t_final, _phase_events(model, phase), method, rtol, atol_vec)
         stats["nsteps"] += seg.nsteps
         stats["nfev"] += seg.nfev
@@ -359,16 +447,34 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
         fired, seg_t, seg_y = seg.fired, seg.t, seg.y
         rec.add(model, seg_t, seg_y, phase)
         t, y = float(seg_t[-1]), seg_y[-1].copy()
-        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end"))
+        c = model.contact
+        friction = SLIP_NAMES[c.slip] if c.exact_coulomb and phase != "free" else ""
+        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
+                               friction))
         if not fired:
             if not impacts and scene.solver.t_end is None:
                 status, message = "no-impact", f"no contact within solver.t_max = {scene.solver.t_max:g} s"
+            elif scene.solver.t_end is None:
+                message = f"no separation within solver.t_max = {scene.solver.t_max:g} s"
             break
-        new = _after(phase, fired[0], model.contact)
         impact = impacts[-1] if impacts else None
+        slipping = [e for e in fired if e in FRICTION_EVENTS]
+        if slipping:  # possibly at the same instant as a contact event (a single bar: u = 0)
+            old = c.slip
+            if old == 0:
+                c.slip = -1.0 if slipping[0] == "slip_backward" else 1.0
+            else:
+                c.slip = _slip_at_stop(model, y, phase)
+                c.slip = 0.0 if c.slip == old else c.slip  # pushed on only by rounding: stuck
+            impact.stick_slip.append((t, SLIP_NAMES[old], SLIP_NAMES[c.slip]))
+        fired = [e for e in fired if e not in FRICTION_EVENTS]
+        if not fired:
+            continue
+        new = _after(phase, fired[0], model.contact)
         if phase == "free":
             model.contact.reset()
             impacts.append(Impact(t_start=t, i_start=rec.count - 1))
+            _begin_slip(model, y)
         else:
             if new == "restitution" and phase in ("elastic", "elastoplastic"):
                 delta_m = model.delta_and_rate(y)[0]

@@ -7,6 +7,9 @@ Checked per impact from what was recorded at maximum compression:
   Jackson-Green fits were made from;
 - delta_max < delta_c: the elastic limit was never reached, so the impact was purely
   Hertzian (delta_r = 0), which may not be what a plastic-impact study expects;
+- delta_max within 100 times the resolution of the tip's position (rtol times the chain's
+  length, since the angles carry a relative error rtol): a very gentle impact whose
+  penetration and energy budget the tolerance cannot resolve;
 - chattering: a flight between two impacts shorter than twice the contact time before it.
   The tip is settling onto the surface. Without the sustained-contact phase (switched off by
   solver.sustained_contact = false) the sequence of ever shorter impacts is not resolved
@@ -45,14 +48,24 @@ def chattering_warning(impacts) -> list[str]:
     return []
 
 
+RESOLUTION_MARGIN = 100.0  # delta_max should exceed the tip's positional resolution this much
+
+
 def validity_warnings(scene: Scene, impacts) -> list[str]:
     """One warning per kind of trouble, naming the impacts it concerns."""
     # with sustained contact the phase machine rests the tip instead: the phases say so
     chatter = [] if scene.solver.t_end is not None and scene.solver.sustained_contact else chattering_warning(impacts)
-    if scene.contact.model != "three-phase" or not impacts:
-        return chatter
-    c = contact_constants(scene)
     found: dict[str, list[tuple[int, str]]] = {}
+    resolution = scene.solver.rtol * sum(scene.chain.length)  # the angles carry rtol |q|
+    for k, impact in enumerate(impacts, start=1):
+        if 0 < impact.delta_m < RESOLUTION_MARGIN * resolution:
+            found.setdefault("resolution", []).append(
+                (k, f"delta_max = {impact.delta_m:.3g} m is within {RESOLUTION_MARGIN:g} times the tip "
+                    f"position's resolution rtol * sum(L) = {resolution:.1g} m: the energy budget closes "
+                    "only to about (resolution / delta_max)^2 of T0; tighten solver.rtol"))
+    if scene.contact.model != "three-phase" or not impacts:
+        return _grouped(found, len(impacts)) + chatter
+    c = contact_constants(scene)
     for k, impact in enumerate(impacts, start=1):
         w = impact.delta_m / c.delta_c
         if impact.delta_m >= YIELD_ONSET * c.delta_c:
@@ -69,14 +82,18 @@ def validity_warnings(scene: Scene, impacts) -> list[str]:
             found.setdefault("elastic", []).append(
                 (k, f"the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
                     "a purely Hertzian impact, delta_r = 0"))
+    return _grouped(found, len(impacts)) + chatter
+
+
+def _grouped(found: dict[str, list[tuple[int, str]]], n_impacts: int) -> list[str]:
     warnings = []
     for items in found.values():
         first, text = items[0]
-        if len(impacts) == 1:
+        if n_impacts == 1:
             warnings.append(f"the impact: {text}")
         elif len(items) == 1:
             warnings.append(f"impact {first}: {text}")
         else:
-            warnings.append(f"{len(items)} of {len(impacts)} impacts, from impact {first} on "
+            warnings.append(f"{len(items)} of {n_impacts} impacts, from impact {first} on "
                             f"(first: {text})")
-    return warnings + chatter
+    return warnings
