@@ -14,7 +14,7 @@ from .errors import ImpactgenError
 from .results import SimulationResult
 
 PHASE_COLOURS = {"free": None, "elastic": "#cfe8ff", "elastoplastic": "#ffd9b3",
-                 "restitution": "#d9f2d9", "reloading": "#f2d9f2"}
+                 "restitution": "#d9f2d9", "reloading": "#f2d9f2", "sustained": "#e6e6e6"}
 
 
 def _pyplot():
