@@ -294,8 +294,6 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
                               "shorten solver.t_end", phase, t)
         rule = rules[phase]
         params.phase = LAW_CODE[rule.law]
-        if coulomb and phase != "free" and params.slip != 0.0:
-            _slip_direction_check(params, session, out_index, y, t, scene.contact.friction, impacts[-1])
         events = rule.events
         if coulomb and phase != "free":
             events = events + SLIP_ENDS[params.slip]
@@ -316,6 +314,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             status, message = _end_without_event(scene, impacts, phase)
             break
         impact = impacts[-1] if impacts else None
+        fired_all = fired
         contact_fired = [e for e in fired if e not in ("slip_stops", "slip_backward", "slip_forward")]
         if coulomb and len(contact_fired) < len(fired) and phase != "free":
             old = params.slip
@@ -342,6 +341,8 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
                 new_phase = "sustained"  # hold the tip: no rebound into ever shorter flights
         if impact is not None and phase != "free":
             impact.switches.append((t, phase, new_phase))
+        if coulomb and "free" not in (phase, new_phase) and params.slip != 0.0 and len(contact_fired) == len(fired_all):
+            _slip_direction_check(params, session, out_index, y, t, scene.contact.friction, impact)
         if new_phase == "free":
             impact.t_end, impact.i_end = t, n_samples - 1
             if scene.solver.t_end is None:
@@ -362,9 +363,9 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
 
 def _slip_direction_check(params, session: CvodeSession, out_index: dict[str, int], y: np.ndarray,
                           t: float, mu: float, impact: Impact) -> None:
-    """A slip whose tip has stopped, or moves the other way, without its own event having
-    fired (it can coincide with a contact event: a single bar stops sliding exactly when it
-    stops penetrating) is decided as at a stop."""
+    """After a contact event with no stick-slip event: a slip whose tip has stopped, or moves
+    the other way, is decided as at a stop. Its own event can coincide with the contact event
+    and go unreported: a single bar stops sliding exactly when it stops penetrating."""
     here = session.outputs(params, np.array([t]), y[None, :])[0]
     v_x, v_y = here[out_index["v_Bx"]], here[out_index["v_By"]]
     if v_x * params.slip > 1e-9 * math.hypot(v_x, v_y):

@@ -37,6 +37,7 @@ from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
 
 METHODS = ("Radau", "BDF", "LSODA", "DOP853", "RK45")
+MAX_SEGMENTS = 100_000  # phase and stick-slip switches in one run: beyond this, stop
 
 
 # ----------------------------------------------------------------------------- the chain
@@ -76,7 +77,7 @@ class ChainModel:
         affine in the force F_f (its generalized force is a F_f)."""
         a = -self.L * np.sin(q)
         free = self.accelerations(q, u, F, 0.0)
-        per_newton = self.accelerations(q, u, F, 1.0) - free
+        per_newton = np.linalg.solve(self.mass_matrix(q), a)  # du/dt per newton of F_f
         return (np.sum(self.L * np.cos(q) * u ** 2) - a @ free) / (a @ per_newton)
 
     def tip(self, q: np.ndarray, u: np.ndarray) -> tuple[float, float, float, float]:
@@ -367,9 +368,9 @@ class _Recorder:
 
 
 def _slip_direction_check(model: ReferenceModel, y: np.ndarray, phase: str, t: float, impact: Impact) -> None:
-    """A slip whose tip has stopped, or moves the other way, without its event (it can
-    coincide with a contact event: a single bar stops sliding exactly when it stops
-    penetrating) is decided as at a stop."""
+    """After a contact event with no stick-slip event: a slip whose tip has stopped, or moves
+    the other way, is decided as at a stop (its event can coincide with the contact event:
+    a single bar stops sliding exactly when it stops penetrating)."""
     c, n = model.contact, model.n
     if not c.exact_coulomb or c.slip == 0:
         return
@@ -438,8 +439,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     stats = {"nsteps": 0, "nfev": 0, "njev": 0}
     status, message = "ok", ""
     while True:
-        if impacts and phase != "free":
-            _slip_direction_check(model, y, phase, t, impacts[-1])
+        if len(spans) >= MAX_SEGMENTS:
+            raise SolverError(f"more than {MAX_SEGMENTS} phase switches; shorten solver.t_end", phase, t)
         seg = integrate(model, phase, t, y, t_final, _phase_events(model, phase), method, rtol, atol_vec)
         stats["nsteps"] += seg.nsteps
         stats["nfev"] += seg.nfev
@@ -471,6 +472,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
         if not fired:
             continue
         new = _after(phase, fired[0], model.contact)
+        if new != "free" and phase != "free" and not slipping:
+            _slip_direction_check(model, y, new, t, impact)
         if phase == "free":
             model.contact.reset()
             impacts.append(Impact(t_start=t, i_start=rec.count - 1))
