@@ -81,6 +81,20 @@ def test_a_bar_comes_to_rest_in_compliant_contact_under_half_its_weight():
 
 def test_lift_off_ends_sustained_contact():
     assert _next_phase("sustained", ["lift_off"], True, None, None) == "free"
+    # a three-link chain that rests, slides without friction for 1.4 s, and is lifted off
+    scene = steel_chain_scene(3)
+    scene = _to_time(scene, 3.0, rtol=1e-8, atol=1e-10).replace(
+        u0=(-1.8352009519918067, 2.296055502946336, -3.728728680036806),
+        contact=dataclasses.replace(scene.contact, friction=0.0))
+    result = impactgen.simulate(scene)
+    held = [p for p in result.phases if p.phase == "sustained"]
+    assert [p.ended_by for p in held] == ["lift_off"]
+    inside = result.phase == "sustained"
+    assert abs(result.F[inside][-1]) < 1e-9 * np.max(result.F[inside])  # the force fell to zero
+    after = result.phases[result.phases.index(held[0]) + 1]
+    assert after.phase == "free" and after.t0 == held[0].t1
+    T, V, Wn = result.T, result.V, result.W_normal
+    assert abs((T[-1] - T[0]) - (Wn[-1] - Wn[0] + V[0] - V[-1])) < 1e-6 * (T[0] + abs(V[0]))
 
 
 def test_a_tip_that_never_separates_says_so():
