@@ -71,6 +71,9 @@ int main(void)
     EXPECT(ig_solver_set_atol(s, contact_atol) == IG_ERR_USAGE, "negative atol refused");
     for (int k = 0; k < MODEL_NSTATE; ++k) contact_atol[k] = 1e-14;
     EXPECT(ig_solver_set_atol(s, contact_atol) == 0, "contact atol accepted");
+    EXPECT(ig_solver_use_jacobian(s, 0) == 0, "difference quotients selected");
+    EXPECT(ig_solver_use_jacobian(s, 1) == (MODEL_HAS_JACOBIAN ? 0 : IG_ERR_USAGE),
+           "analytic Jacobian selected only if the model has it");
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started");
     int flag, fills = 0;
     while ((flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots)) == IG_BUFFER_FULL) {
