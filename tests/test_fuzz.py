@@ -10,7 +10,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import impactgen
@@ -136,6 +136,7 @@ def _inside(folder: Path):
 
 @settings(max_examples=400, deadline=None, suppress_health_check=list(HealthCheck))
 @given(argument_lists())
+@example(["-\x1e"])  # a record separator, which str.splitlines takes for a line break
 def test_cli_ends_in_success_or_our_exit_codes(argv):
     out, err = io.StringIO(), io.StringIO()
     with _inside(FUZZ_DIR), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):

@@ -133,7 +133,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ImpactgenError as exc:
         if debug:
             raise
-        message = " ".join(str(exc).split("\n"))  # one line, whatever a message holds
+        message = _one_line(str(exc))
         print(f"impactgen: error: {message}", file=sys.stderr)
         if wants_json:
             print(json.dumps({"status": "error", "exit_code": exc.exit_code, "message": message}))
@@ -146,6 +146,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     except SystemExit as exc:  # --help
         return exc.code if isinstance(exc.code, int) else 0
+
+
+def _one_line(text: str) -> str:
+    """One printable line whatever a message holds: breaks become spaces, and other control
+    characters (which str.splitlines may also take for line breaks) are escaped."""
+    text = " ".join(text.splitlines())
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode() for ch in text)
 
 
 def _overrides(items: list[str]) -> dict:
