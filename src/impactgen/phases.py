@@ -11,10 +11,11 @@ delta_r, R_res) and re-initialises the integrator, since the force law changes.
     reloading --passes delta_m--> elastic or elastoplastic (the curve it left)
     elastic/elastoplastic --max_compression, impacts chattering--> sustained --lift_off--> free
 
-Sustained contact (scenes run to a time): when a flight is chattering (validity.chattering), the next impact does not rebound at its maximum compression; the tip
-is held at that depth by a constraint force F >= 0 until F falls to 0 (lift-off). The
-elastic energy stored in the dent stays in W_normal as a loss. After lift-off the surface
-level is the tip's height there, so later impacts start from delta = 0.
+Sustained contact (scenes run to a time): when a flight is chattering (validity.chattering),
+the next impact does not rebound at its maximum compression; the tip is held at that depth
+by a constraint force F >= 0 until F falls to 0 (lift-off). The elastic energy stored in
+the dent stays in W_normal as a loss. After lift-off the surface level is the tip's height
+there, so later impacts start from delta = 0.
 
 With exact Coulomb friction, a stick-slip state (stick_slip.py) runs beside the phase.
 """
@@ -23,6 +24,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -34,6 +36,7 @@ from .errors import SolverError
 from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
 from .stick_slip import ENDS as SLIP_ENDS
+from .stick_slip import EVENTS as SLIP_EVENTS
 from .stick_slip import LABEL as SLIP_LABEL
 from .stick_slip import slip_after, slip_at_contact, slip_when_stopped
 from .validity import chattering
@@ -315,7 +318,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             break
         impact = impacts[-1] if impacts else None
         fired_all = fired
-        contact_fired = [e for e in fired if e not in ("slip_stops", "slip_backward", "slip_forward")]
+        contact_fired = [e for e in fired if e not in SLIP_EVENTS]
         if coulomb and len(contact_fired) < len(fired) and phase != "free":
             old = params.slip
             hold = output(y, t, "F_f", slip=0.0)
@@ -342,7 +345,9 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         if impact is not None and phase != "free":
             impact.switches.append((t, phase, new_phase))
         if coulomb and "free" not in (phase, new_phase) and params.slip != 0.0 and len(contact_fired) == len(fired_all):
-            _slip_direction_check(params, session, out_index, y, t, scene.contact.friction, impact)
+            here = {k: last[out_index[k]] for k in ("v_Bx", "v_By", "F")}
+            _slip_direction_check(params, here, lambda: output(y, t, "F_f", slip=0.0),
+                                  scene.contact.friction, t, impact)
         if new_phase == "free":
             impact.t_end, impact.i_end = t, n_samples - 1
             if scene.solver.t_end is None:
@@ -361,19 +366,17 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
 
 
-def _slip_direction_check(params, session: CvodeSession, out_index: dict[str, int], y: np.ndarray,
-                          t: float, mu: float, impact: Impact) -> None:
+def _slip_direction_check(params, here: dict[str, float], holding_force: Callable[[], float],
+                          mu: float, t: float, impact: Impact) -> None:
     """After a contact event with no stick-slip event: a slip whose tip has stopped, or moves
     the other way, is decided as at a stop. Its own event can coincide with the contact event
-    and go unreported: a single bar stops sliding exactly when it stops penetrating."""
-    here = session.outputs(params, np.array([t]), y[None, :])[0]
-    v_x, v_y = here[out_index["v_Bx"]], here[out_index["v_By"]]
+    and go unreported: a single bar stops sliding exactly when it stops penetrating.
+    `here` holds v_Bx, v_By and F at the switch."""
+    v_x, v_y = here["v_Bx"], here["v_By"]
     if v_x * params.slip > 1e-9 * math.hypot(v_x, v_y):
         return
     old = params.slip
-    params.slip = 0.0
-    hold = session.outputs(params, np.array([t]), y[None, :])[0][out_index["F_f"]]
-    params.slip = slip_when_stopped(here[out_index["F"]], hold, mu)
+    params.slip = slip_when_stopped(here["F"], holding_force(), mu)
     if params.slip != old:
         impact.stick_slip.append((t, SLIP_LABEL[old], SLIP_LABEL[params.slip]))
 

@@ -25,6 +25,7 @@ ENDS = {
 }
 
 LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
+EVENTS = frozenset(name for ends in ENDS.values() for name, _ in ends)
 
 
 def slip_when_stopped(F: float, F_hold: float, mu: float) -> float:
