@@ -8,39 +8,42 @@
 
 #include "model.h"
 
-/* Cholesky factorization in place of a symmetric positive definite M (lower triangle
- * filled): M = L L^T. Returns nonzero if M is not positive definite. */
-static int cholesky_factor(double *M)
+/* Root-free Cholesky factorization M = L D L^T of a symmetric positive definite M, in place:
+ * the unit lower triangle L below the diagonal of M, and dinv[j] = 1 / D_j. No square roots
+ * and one division per pivot, which matter at this size. Returns nonzero if M is not
+ * positive definite. */
+static int ldl_factor(double *M, double *dinv)
 {
     const int n = MODEL_NQ;
+    double D[MODEL_NQ];
     for (int j = 0; j < n; ++j) {
         double d = M[j * n + j];
-        for (int k = 0; k < j; ++k) d -= M[j * n + k] * M[j * n + k];
+        for (int k = 0; k < j; ++k) d -= M[j * n + k] * M[j * n + k] * D[k];
         if (!(d > 0.0)) return 1;
-        d = sqrt(d);
-        M[j * n + j] = d;
+        D[j] = d;
+        dinv[j] = 1.0 / d;
         for (int i = j + 1; i < n; ++i) {
             double s = M[i * n + j];
-            for (int k = 0; k < j; ++k) s -= M[i * n + k] * M[j * n + k];
-            M[i * n + j] = s / d;
+            for (int k = 0; k < j; ++k) s -= M[i * n + k] * M[j * n + k] * D[k];
+            M[i * n + j] = s * dinv[j];
         }
     }
     return 0;
 }
 
-/* Solve L L^T x = b in place, with the factor from cholesky_factor. */
-static void cholesky_solve(const double *L, double *b)
+/* Solve L D L^T x = b in place, with the factors from ldl_factor. */
+static void ldl_solve(const double *L, const double *dinv, double *b)
 {
     const int n = MODEL_NQ;
     for (int i = 0; i < n; ++i) {
         double s = b[i];
         for (int k = 0; k < i; ++k) s -= L[i * n + k] * b[k];
-        b[i] = s / L[i * n + i];
+        b[i] = s;
     }
     for (int i = n - 1; i >= 0; --i) {
-        double s = b[i];
+        double s = b[i] * dinv[i];
         for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * b[k];
-        b[i] = s / L[i * n + i];
+        b[i] = s;
     }
 }
 
@@ -66,9 +69,18 @@ double model_normal_force(double delta, const model_params *p)
         if (!(delta > 0)) return 0.0;
         const double w = delta/delta_c;
         const double ln_w = log(w);
+        const double sqrt_w = sqrt(w);
+        const double r = exp((1.0/180.0)*ln_w);
+        const double r2 = (r*r);
+        const double r4 = (r2*r2);
+        const double r8 = (r4*r4);
+        const double r10 = r2*r8;
+        const double w_5_12 = sqrt_w/(r*r10*r4);
+        const double w_5_9 = r10*sqrt_w;
+        const double w_11_10 = r10*r8*w;
         const double a = sqrt(R)*sqrt(delta)*exp((1.0/2.0)*B*(ln_w - log(19.0/10.0)));
         const double H_over_S_y = 0.92*cos(3.14159265358979323846*a/R) + 1.92;
-        const double F = P_c*((w*sqrt(w))*exp(-0.17*exp((5.0/12.0)*ln_w)) + 4*H_over_S_y*(1 - exp(-1.0/78.0*exp((5.0/9.0)*ln_w)))*exp(1.1*ln_w)/C_j);
+        const double F = P_c*(sqrt_w*w*exp(-0.17*w_5_12) + 4*H_over_S_y*w_11_10*(1 - exp(-1.0/78.0*w_5_9))/C_j);
 
         return F;
     }
@@ -116,9 +128,9 @@ static double normal_force_slope(double delta, const model_params *p)
         const double s5 = 3.14159265358979323846*exp(s4*(log(delta/delta_c) - log(19.0/10.0)))/sqrt(R);
         const double s6 = s1*s5;
         const double s7 = s3*(0.92*cos(s6) + 1.92);
-        const double s8 = pow(delta_c, -1.1)*(1 - s2);
+        const double s8 = (1 - s2)/pow(delta_c, 11.0/10.0);
         const double s9 = s5/s1;
-        const double dF = P_c*(-0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) + 4.4*pow(delta, 0.10000000000000009)*s7*s8 + (10.0/351.0)*pow(delta, 0.6555555555555557)*pow(delta_c, -1.6555555555555557)*s2*s7 - 3.68*pow(delta, 1.1)*s3*s8*(s4*s9 + (1.0/2.0)*s9)*sin(s6) + (3.0/2.0)*s0*s1/(delta_c*sqrt(delta_c)));
+        const double dF = P_c*((10.0/351.0)*pow(delta, 59.0/90.0)*s2*s7/pow(delta_c, 149.0/90.0) - 0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) - 3.68*pow(delta, 11.0/10.0)*s3*s8*(s4*s9 + (1.0/2.0)*s9)*sin(s6) + (22.0/5.0)*pow(delta, 1.0/10.0)*s7*s8 + (3.0/2.0)*s0*s1/(delta_c*sqrt(delta_c)));
 
         return dF;
     }
@@ -189,8 +201,9 @@ static int accelerations(const double *y, const model_params *p, double *udot, t
     f[0] = -1.0/2.0*L1*kin4*m1 + L1*(F*cos_q1 - F_f*sin_q1) - kin1*kin4 + kin3*kin5*(u2*u2);
     f[1] = L2*(F*cos_q2 - F_f*sin_q2) - cos_q2*g*kin2*m2 - kin3*kin5*(u1*u1);
 
-    if (cholesky_factor(M)) return -1;
-    cholesky_solve(M, f);
+    double dinv[2];
+    if (ldl_factor(M, dinv)) return -1;
+    ldl_solve(M, dinv, f);
     for (int i = 0; i < 2; ++i) udot[i] = f[i];
     c->delta = delta;
     c->v_By = v_By;
@@ -350,8 +363,9 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     f[0] = -1.0/2.0*L1*kin4*m1 + L1*(F*cos_q1 - F_f*sin_q1) - kin1*kin4 + kin3*kin5*(u2*u2);
     f[1] = L2*(F*cos_q2 - F_f*sin_q2) - cos_q2*g*kin2*m2 - kin3*kin5*(u1*u1);
 
-    if (cholesky_factor(M)) return -1;
-    cholesky_solve(M, f);
+    double dinv[2];
+    if (ldl_factor(M, dinv)) return -1;
+    ldl_solve(M, dinv, f);
     const double udot1 = f[0];
     const double udot2 = f[1];
     /* G = df/dy - (dM/dy) du/dt (total derivatives through F and F_f); Jw: the works */
@@ -417,7 +431,7 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     for (int j = 0; j < 4; ++j) {
         double column[2];
         for (int i = 0; i < 2; ++i) column[i] = G[i * 4 + j];
-        cholesky_solve(M, column);
+        ldl_solve(M, dinv, column);
         for (int i = 0; i < 2; ++i) J[(2 + i) * MODEL_NSTATE + j] = column[i];
         for (int k = 0; k < 2; ++k) J[(4 + k) * MODEL_NSTATE + j] = Jw[k * 4 + j];
     }
