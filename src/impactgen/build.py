@@ -237,14 +237,24 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
         return entry
 
 
-_loaded: dict[tuple[ModelSpec, str], CompiledModel] = {}  # (spec, cache root + flags) -> model
+_loaded: dict[tuple[ModelSpec, tuple], CompiledModel] = {}  # (spec, _environment()) -> model
 _loaded_lock = threading.Lock()
+_ENVIRONMENT = ("IMPACTGEN_CACHE_DIR", "XDG_CACHE_HOME", "HOME", "IMPACTGEN_SANITIZE")
+
+
+def _environment() -> tuple[str | None, ...]:
+    """The variables that choose the cache folder and the flags: read on every call, since a
+    warm simulation looks its model up once per run."""
+    return tuple(os.environ.get(name) for name in _ENVIRONMENT)
 
 
 def compile_model(spec: ModelSpec) -> CompiledModel:
     """Return the compiled model for `spec`, building it on first use (once per process)."""
+    where = _environment()
+    found = _loaded.get((spec, where))
+    if found is not None:
+        return found
     root = cache_root()
-    where = f"{root}|{build_flags()}"
     with _loaded_lock:
         if (spec, where) in _loaded:
             return _loaded[(spec, where)]

@@ -43,7 +43,7 @@ from .validity import chattering
 
 RISING, FALLING = 1, -1
 LAW_CODE = {name: code for code, name in enumerate(PHASES)}  # params.phase of each force law
-FIRST_BUFFER = 2048  # samples; doubled while a segment keeps filling it
+FIRST_BUFFER = 1024  # samples; doubled while a segment keeps filling it
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 
 
@@ -69,12 +69,12 @@ def phase_rules(plastic: bool) -> dict[str, PhaseRule]:
 class CvodeSession:
     """One CVODE integrator for a whole simulation; freed when the session ends."""
 
-    def __init__(self, model: CompiledModel, scene: Scene, atol: np.ndarray):
+    def __init__(self, model: CompiledModel, scene: Scene, atol: list[float]):
         self.model = model
         ffi, lib = model.ffi, model.lib
         err = ffi.new("char[]", 512)
         method = 0 if scene.solver.method == "bdf" else 1
-        atol_c = ffi.new("double[]", [float(a) for a in atol])
+        atol_c = ffi.new("double[]", atol)
         analytic = 1 if model.spec.jacobian else 0
         solver = lib.ig_solver_new(method, analytic, scene.solver.rtol, atol_c, scene.solver.max_steps, err, 512)
         if solver == ffi.NULL:
@@ -89,13 +89,15 @@ class CvodeSession:
         self.roots = ffi.new("int[]", nev)
         self.n_out = ffi.new("int *")
         self.y0 = np.empty(model.nstate)
-        self.y0_c = ffi.cast("double *", self.y0.ctypes.data)
+        self.y0_c = ffi.from_buffer("double[]", self.y0)
         self.event_index = {name: i for i, name in enumerate(model.event_names)}
 
     def _alloc(self) -> None:
-        ffi, n = self.model.ffi, self.model.nstate
-        self.t_buf = ffi.new("double[]", self.capacity)
-        self.y_buf = ffi.new("double[]", self.capacity * n)
+        ffi = self.model.ffi
+        self.t_samples = np.empty(self.capacity)  # CVODE writes its steps here
+        self.y_samples = np.empty((self.capacity, self.model.nstate))
+        self.t_buf = ffi.from_buffer("double[]", self.t_samples)
+        self.y_buf = ffi.from_buffer("double[]", self.y_samples)
 
     def segment(self, params, phase: str, t0: float, y0: np.ndarray, t_stop: float,
                 events: tuple[tuple[str, int], ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -114,9 +116,8 @@ class CvodeSession:
         while True:
             flag = lib.ig_segment_advance(self.solver, self.t_buf, self.y_buf, self.capacity, n_out, roots)
             k = n_out[0]
-            ts.append(np.frombuffer(ffi.buffer(self.t_buf, 8 * k), dtype=float).copy())
-            ys.append(np.frombuffer(ffi.buffer(self.y_buf, 8 * k * model.nstate),
-                                    dtype=float).reshape(k, model.nstate).copy())
+            ts.append(self.t_samples[:k].copy())
+            ys.append(self.y_samples[:k].copy())
             if flag == lib.IG_BUFFER_FULL:
                 self.capacity *= 2
                 self._alloc()
@@ -126,25 +127,26 @@ class CvodeSession:
                 raise SolverError(self._message(), phase, t_fail)
             break
         fired = [events[i][0] for i in range(len(events)) if flag == lib.IG_ROOT and roots[i] != 0]
+        if len(ts) == 1:
+            return ts[0], ys[0], fired
         return np.concatenate(ts), np.concatenate(ys), fired
 
     def use_jacobian(self, analytic: bool) -> None:
         if self.model.lib.ig_solver_use_jacobian(self.solver, 1 if analytic else 0) != 0:
             raise SolverError(self._message())
 
-    def set_atol(self, atol: np.ndarray) -> None:
-        values = self.model.ffi.new("double[]", [float(a) for a in atol])
+    def set_atol(self, atol: list[float]) -> None:
+        values = self.model.ffi.new("double[]", atol)
         if self.model.lib.ig_solver_set_atol(self.solver, values) != 0:
             raise SolverError(self._message())
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
-        nout = len(model.output_names)
         t = np.ascontiguousarray(t, dtype=float)
         y = np.ascontiguousarray(y, dtype=float)
-        out = np.empty((len(t), nout))
-        model.lib.ig_outputs(params, len(t), ffi.cast("double *", t.ctypes.data),
-                             ffi.cast("double *", y.ctypes.data), ffi.cast("double *", out.ctypes.data))
+        out = np.empty((len(t), len(model.output_names)))
+        model.lib.ig_outputs(params, len(t), ffi.from_buffer("double[]", t), ffi.from_buffer("double[]", y),
+                             ffi.from_buffer("double[]", out))
         return out
 
     def stats(self) -> dict[str, int]:
@@ -177,17 +179,15 @@ def likely_cause(message: str) -> str:
     return f"{message}; likely cause: {hint}"
 
 
-def default_atol(scene: Scene, nstate: int) -> np.ndarray:
+def default_atol(scene: Scene, nstate: int) -> list[float]:
     """solver.atol for angles and speeds; the works (J) get atol scaled by a typical energy."""
-    n = scene.n
-    atol = np.full(nstate, scene.solver.atol)
+    n, atol = scene.n, scene.solver.atol
     energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
-    atol[2 * n:] = scene.solver.atol * energy_scale
-    return atol
+    return [atol] * (2 * n) + [atol * energy_scale] * (nstate - 2 * n)
 
 
-def contact_atol(scene: Scene, consts: ContactConstants, free_atol: np.ndarray, y: np.ndarray,
-                 out: dict[str, float]) -> np.ndarray:
+def contact_atol(scene: Scene, consts: ContactConstants, free_atol: list[float], y: np.ndarray,
+                 out: dict[str, float]) -> list[float]:
     """Absolute tolerances inside one impact, scaled to it at its first instant.
 
     The penetration is a difference of tip heights, so the angles must be resolved to a
@@ -201,11 +201,12 @@ def contact_atol(scene: Scene, consts: ContactConstants, free_atol: np.ndarray, 
     m_eff = min(2.0 * out["T"] / v_tip2, m_total) if v_tip2 > 0 else m_total
     v_n = max(out["delta_rate"], 0.0)
     delta_est = (15.0 * m_eff * v_n ** 2 / (16.0 * consts.E_star * math.sqrt(consts.R))) ** 0.4
-    atol = free_atol.copy()
-    atol[:n] = np.clip(1e-2 * rtol * delta_est / sum(scene.chain.length), 1e-15, free_atol[:n])
-    atol[n:2 * n] = np.minimum(free_atol[n:2 * n], max(rtol * float(np.max(np.abs(y[n:2 * n]))), 1e-300))
-    atol[2 * n:] = np.minimum(free_atol[2 * n:], max(rtol * out["T"], 1e-300))
-    return atol
+    angle = 1e-2 * rtol * delta_est / sum(scene.chain.length)
+    speed = max(rtol * max(abs(u) for u in y[n:2 * n].tolist()), 1e-300)
+    work = max(rtol * out["T"], 1e-300)
+    return ([min(max(angle, 1e-15), a) for a in free_atol[:n]]
+            + [min(a, speed) for a in free_atol[n:2 * n]]
+            + [min(a, work) for a in free_atol[2 * n:]])
 
 
 def surface_height(scene: Scene) -> float:
@@ -257,7 +258,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
             setattr(params, k, v)
         return float(value)
 
-    def impact_begins(y_now: np.ndarray, out_now: np.ndarray) -> None:
+    def impact_begins(y_now: np.ndarray, out_now: list[float]) -> None:
         named = {k: out_now[out_index[k]] for k in ("v_Bx", "v_By", "delta_rate", "T")}
         session.set_atol(contact_atol(scene, consts, free_atol, y_now, named))
         if coulomb:
@@ -270,7 +271,8 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     t = 0.0
     if coulomb:
         params.slip = 1.0  # free flight: no friction, whatever the state
-    first = session.outputs(params, np.array([t]), y[None, :])[0]
+    first_row = session.outputs(params, np.array([t]), y[None, :])
+    first = first_row[0].tolist()  # Python floats: the switch logic works on scalars
     delta0, rate0 = first[out_index["delta"]], first[out_index["delta_rate"]]
     touching = delta0 >= -1e-12 * max(1.0, sum(scene.chain.length))
     tip_speed = abs(first[out_index["v_Bx"]]) + abs(first[out_index["v_By"]])
@@ -282,7 +284,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         # a degenerate start: touching, but moving along or away from the surface
         return _no_impact_at_start(scene, model, y, first, rate0, started)
 
-    ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first[None, :]], [np.array([phase])]
+    ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first_row], [(phase, 1)]
     spans: list[PhaseSpan] = []
     impacts: list[Impact] = []
     n_samples = 1
@@ -308,9 +310,9 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         if friction_state == "stick":
             _check_stick(seg_out, out_index, scene.contact.friction, phase, float(seg_t[-1]))
         ts.append(seg_t), ys.append(seg_y), outs.append(seg_out)
-        labels.append(np.full(len(seg_t), phase))
+        labels.append((phase, len(seg_t)))
         n_samples += len(seg_t)
-        t, y, last = float(seg_t[-1]), seg_y[-1].copy(), seg_out[-1]
+        t, y, last = float(seg_t[-1]), seg_y[-1].copy(), seg_out[-1].tolist()
         spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
                                friction_state))
         if not fired:
@@ -358,7 +360,8 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         phase = new_phase
 
     trajectory = Trajectory(
-        t=np.concatenate(ts), y=np.concatenate(ys), phase=np.concatenate(labels),
+        t=np.concatenate(ts), y=np.concatenate(ys),
+        phase=np.repeat(np.array([name for name, _ in labels]), [count for _, count in labels]),
         outputs={name: col for name, col in zip(model.output_names, np.concatenate(outs).T)},
     )
     stats = session.stats()
@@ -400,7 +403,7 @@ def _check_stick(out: np.ndarray, out_index: dict[str, int], mu: float, phase: s
                           "fired; tighten solver.rtol", phase, t)
 
 
-def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: np.ndarray,
+def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: list[float],
                         rate0: float, started: float) -> SimulationResult:
     motion = "along" if rate0 == 0 else "away from"
     trajectory = Trajectory(np.array([0.0]), y[None, :], np.array(["free"]),
