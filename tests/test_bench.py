@@ -54,3 +54,21 @@ def test_rhs_and_scaling_benchmarks_report_finite_figures():
     rows = scaling((1, 2))
     assert [r["links"] for r in rows] == [1, 2]
     assert rows[1]["c_bytes"] > rows[0]["c_bytes"] and all(r["total_s"] > 0 for r in rows)
+
+
+def test_targets_are_judged_on_the_measured_figures():
+    from impactgen.bench.report import targets
+
+    def run(name, rtol, err, ms):
+        return wp.Run("paper", name, "f", rtol, "ok", wall_s=ms * 1e-3, err_u_final=err)
+    runs = [run("CVODE BDF (impactgen C)", 1e-8, 1e-7, 1.0), run("CVODE BDF (impactgen C)", 1e-12, 5e-10, 3.0),
+            run("reference (Radau, numpy)", 1e-6, 1e-6, 100.0), run("reference (Radau, numpy)", 1e-8, 1e-8, 400.0),
+            run("scipy DOP853 + C RHS", 1e-7, 1e-7, 8.0)]
+    rhs = [{"links": 2, "c_free_ns": 50.0, "c_elastic_ns": 52.0, "c_elastoplastic_ns": 120.0, "c_restitution_ns": 51.0}]
+    scaling_rows = [{"links": 10, "total_s": 5.0}]
+    verdicts = {g["target"].split(":")[0]: (g["measured"], g["verdict"]) for g in targets(runs, rhs, scaling_rows)}
+    assert verdicts["paper impact, rtol 1e-8"] == ("200x", "met")  # 100 ms -> 400 ms over 1e-6 -> 1e-8
+    assert verdicts["... and >= 10x faster than the best scipy method with the C right-hand side"] == ("8.0x", "missed")
+    assert verdicts["CVODE with the generated C reaches 1e-9 relative error in u_final"] == ("5.0e-10", "met")
+    assert verdicts["right-hand side, n = 2, from C"] == ("50 / 52 / 120 / 51 ns", "missed")
+    assert verdicts["cold build (derive + emit + compile), n = 10"] == ("5.0 s", "met")

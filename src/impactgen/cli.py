@@ -116,7 +116,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             unknown = parts - {"workprecision", "rhs", "scaling"}
             if unknown or not parts:
                 raise SceneError("--parts", f"choose from workprecision, rhs, scaling (got {args.parts!r})")
-            print(run_benchmarks(args.out, args.quick, parts))
+            report = run_benchmarks(args.out, args.quick, parts)
+            for goal in json.loads((report.parent / "benchmark.json").read_text())["targets"]:
+                print(f"{goal['verdict']:>12}  {goal['measured']:<24} {goal['target']}")
+            print(report)
             return 0
         if args.command == "generate":
             from .scene import load_scene

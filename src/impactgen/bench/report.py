@@ -106,6 +106,42 @@ def speedups(runs: list[Run], scene: str) -> list[dict]:
     return [{"target_error": target.err_u_final, "cvode_bdf_ms": target.wall_s * 1e3}] + rows
 
 
+def _verdict(measured: float, ok: bool) -> str:
+    return "not measured" if measured != measured else ("met" if ok else "missed")
+
+
+def targets(runs: list[Run], rhs_rows: list[dict], scaling_rows: list[dict]) -> list[dict]:
+    """The issue's speed and accuracy targets against what this run measured."""
+    rows = []
+    head = speedups(runs, "paper")
+    if head:
+        by_name = {r["contender"]: r["time_ms"] for r in head[1:]}
+        mine = head[0]["cvode_bdf_ms"]
+        ref = next((t for name, t in by_name.items() if name.startswith("reference")), math.nan)
+        scipy = min((t for name, t in by_name.items() if name.startswith("scipy") and t == t), default=math.nan)
+        rows.append({"target": "paper impact, rtol 1e-8: >= 100x faster than the reference engine at the same error",
+                     "measured": f"{ref / mine:.0f}x", "verdict": _verdict(ref, ref / mine >= 100)})
+        rows.append({"target": "... and >= 10x faster than the best scipy method with the C right-hand side",
+                     "measured": f"{scipy / mine:.1f}x", "verdict": _verdict(scipy, scipy / mine >= 10)})
+    cvode = [r.err_u_final for r in runs if r.scene == "paper" and r.contender.startswith("CVODE") and r.status == "ok"]
+    if cvode:
+        rows.append({"target": "CVODE with the generated C reaches 1e-9 relative error in u_final",
+                     "measured": f"{min(cvode):.1e}", "verdict": _verdict(min(cvode), min(cvode) <= 1e-9)})
+    two = next((r for r in rhs_rows if r["links"] == 2), None)
+    if two:
+        phases = ("free", "elastic", "elastoplastic", "restitution")
+        worst = max(two[f"c_{p}_ns"] for p in phases)
+        rows.append({"target": "right-hand side, n = 2, from C: < 100 ns per call (every contact phase)",
+                     "measured": " / ".join(f"{two[f'c_{p}_ns']:.0f}" for p in phases) + " ns",
+                     "verdict": _verdict(worst, worst < 100)})
+    for n, limit in ((10, 20.0), (20, 90.0)):
+        row = next((r for r in scaling_rows if r["links"] == n), None)
+        if row:
+            rows.append({"target": f"cold build (derive + emit + compile), n = {n}: < {limit:.0f} s",
+                         "measured": f"{row['total_s']:.1f} s", "verdict": _verdict(row["total_s"], row["total_s"] < limit)})
+    return rows
+
+
 def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], notes: list[str],
                  rhs_rows: list[dict], scaling_rows: list[dict], elapsed_s: float) -> Path:
     out.mkdir(parents=True, exist_ok=True)
@@ -115,10 +151,11 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
     _write_csv(out / "scaling.csv", scaling_rows)
     scenes = list(dict.fromkeys(r.scene for r in runs))
     summary = {s: speedups(runs, s) for s in scenes}
+    goals = targets(runs, rhs_rows, scaling_rows)
     (out / "benchmark.json").write_text(json.dumps({
         "mode": mode, "machine": info, "elapsed_s": elapsed_s, "notes": notes,
         "truth": [asdict(t) for t in truths], "runs": [asdict(r) for r in runs],
-        "speedups_at_rtol_1e-8": summary, "rhs": rhs_rows, "scaling": scaling_rows,
+        "speedups_at_rtol_1e-8": summary, "targets": goals, "rhs": rhs_rows, "scaling": scaling_rows,
     }, indent=1, default=lambda v: None))
     figures = [_plot_workprecision(runs, s, out) for s in scenes]
     if rhs_rows:
@@ -136,6 +173,9 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
              f"Measured by `impactgen bench{' --quick' if mode == 'quick' else ''}` in {elapsed_s:.0f} s.", "",
              "## Machine", ""]
     lines += [f"- {k}: {v}" for k, v in info.items()]
+    if goals:
+        lines += ["", "## Targets", "", "| target | measured | |", "|---|---|---|"]
+        lines += [f"| {g['target']} | {g['measured']} | {g['verdict']} |" for g in goals]
     lines += ["", "## Method", "",
               "Error: relative error of u_final (max norm), delta_r and Delta T against a reference",
               "solution from CVODE BDF at rtol 1e-13, atol 1e-15, whose agreement with the independent",
