@@ -179,3 +179,21 @@ def test_analytic_jacobian_matches_central_differences(spec):
                 fd[:, j] = (out[0] - out[1]) / (2 * h)
             scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
             assert np.all(np.abs(J - fd) <= 1e-5 * scale + 1e-9), phase
+
+
+def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
+    """The C law takes its fractional powers from one exponential (w^(1/180) products); it must
+    agree with the reference engine's w ** k to rounding over the whole elasto-plastic range."""
+    from impactgen.build import compile_model
+    from impactgen.contact_constants import contact_constants
+    from impactgen.engines import model_spec
+    from impactgen.phases import fill_params
+    from impactgen.reference import ReferenceModel
+    model = compile_model(model_spec(paper_scene))
+    params = fill_params(model, paper_scene, contact_constants(paper_scene))
+    params.phase = model.lib.MODEL_PHASE_ELASTOPLASTIC
+    contact = ReferenceModel.from_scene(paper_scene).contact
+    for w in np.geomspace(1.9, 1e4, 200):
+        delta = w * contact.delta_c
+        c_force, exact = model.lib.model_normal_force(delta, params), contact.jackson_green(delta)
+        assert c_force == pytest.approx(exact, rel=2e-14, abs=0.0), w
