@@ -180,7 +180,8 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
               "Error: relative error of u_final (max norm), delta_r and Delta T against a reference",
               "solution from CVODE BDF at rtol 1e-13, atol 1e-15, whose agreement with the independent",
               "reference engine (Radau, rtol 1e-12) is shown below. Time: median wall time of repeated",
-              "runs in a warm process (models compiled, imports done). Python-driven contenders have a",
+              "runs in a warm process (models compiled, imports done): at least 5 runs (3 with --quick),",
+              "and a fast contender repeats until its runs add up to 0.25 s. Python-driven contenders have a",
               "budget of right-hand-side calls; a contender stops tightening after a failure, a budget",
               "overrun or a run slower than the limit.", ""]
     lines += ["| scene | u_final | delta_r | Delta T | (reference engine vs CVODE at 1e-13) |", "|---|---|---|---|---|"]
@@ -204,7 +205,8 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
                              f"{r.err_delta_T:.1e} | {r.wall_s * 1e3:.2f} | {r.nsteps} | {r.nfev} | {r.status} |")
     if rhs_rows:
         lines += ["", "## Right-hand side, ns per call", "", "![rhs](rhs.png)", "",
-                  "Generated C called from a C loop, per contact phase; the other columns in the",
+                  "Generated C called from a C loop, per contact phase (the fastest of 7 loops of about",
+                  "50 ms); the other columns in the",
                   "elasto-plastic phase (Jackson-Green: a logarithm, four exponentials, a cosine).", "",
                   "| links | C free | C elastic | C elasto-plastic | C restitution | C through cffi | "
                   "sympy lambdify | reference |", "|---|---|---|---|---|---|---|---|"]

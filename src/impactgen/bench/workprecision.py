@@ -3,7 +3,9 @@
 The error of a run is measured against a solution computed far more accurately: CVODE
 BDF at rtol 1e-13 (atol 1e-15), checked against the independent reference engine (Radau)
 at rtol 1e-12; their disagreement is reported beside the results. Time is the median wall
-time of repeated runs in a warm process (models compiled, caches filled).
+time of repeated runs in a warm process (models compiled, caches filled): at least
+`repeats` of them, and a fast contender repeats until its runs add up to `min_time_s`, so
+that a millisecond run's median rests on hundreds of runs rather than on five.
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ from ..scene import Scene, load_scene, steel_chain_scene
 from .contenders import BudgetExceeded, Contender, available_contenders, with_tolerance
 
 TRUTH_RTOL = 1e-13
+MAX_REPEATS = 500
 CHECK_RTOL = 1e-12
 
 
@@ -30,6 +33,7 @@ class Settings:
     budget: int  # right-hand-side calls for the Python-driven contenders
     slow_s: float  # a run slower than this is not repeated, and ends the contender's sweep
     scenes: tuple[str, ...]
+    min_time_s: float = 0.25  # a fast contender repeats until its runs add up to this (at most MAX_REPEATS)
 
 
 QUICK = Settings(tuple(10.0 ** -k for k in range(3, 11)), 3, 200_000, 2.0, ("paper", "chain3"))
@@ -91,8 +95,8 @@ def compute_truth(name: str, scene: Scene) -> Truth:
 def measure(contender: Contender, name: str, scene: Scene, rtol: float, truth: Truth,
             settings: Settings) -> Run:
     run = Run(name, contender.name, contender.family, rtol, "ok")
-    times = []
-    for _ in range(settings.repeats):
+    times: list[float] = []
+    while len(times) < settings.repeats or (sum(times) < settings.min_time_s and len(times) < MAX_REPEATS):
         started = time.perf_counter()
         try:
             result = contender.run(scene, rtol, settings.budget)
