@@ -177,3 +177,20 @@ def test_an_impact_finer_than_the_tolerance_resolves_carries_a_warning():
     result = impactgen.simulate(impactgen.load_scene(PAPER, overrides=tight))
     assert not any("resolution" in w for w in result.warnings)
     assert abs(result.summary["energy"]["residual"]) < 1e-5 * result.summary["T0"]
+
+
+def test_a_reused_integrator_gives_what_a_fresh_one_gives():
+    """Warm runs reuse an idle CVODE integrator (CvodeSession.open): nothing of the previous
+    run (tolerances, counters, Jacobian choice, step history) may leak into the next."""
+    from impactgen.phases import CvodeSession
+    CvodeSession._idle.clear()
+    loose = impactgen.load_scene(PAPER, overrides={"solver.rtol": 1e-6})
+    tight = impactgen.load_scene(PAPER, overrides={"solver.rtol": 1e-11, "solver.atol": 1e-13})
+    fresh = impactgen.simulate(loose)
+    assert sum(len(v) for v in CvodeSession._idle.values()) == 1  # handed back after the run
+    impactgen.simulate(tight)
+    reused = impactgen.simulate(loose)
+    assert sum(len(v) for v in CvodeSession._idle.values()) == 1  # the same one, not a second
+    assert np.array_equal(fresh.t, reused.t) and np.array_equal(fresh.y, reused.y)
+    for key in ("nsteps", "nfev", "njev", "ngev", "segments"):
+        assert fresh.stats[key] == reused.stats[key], key

@@ -67,7 +67,28 @@ def phase_rules(plastic: bool) -> dict[str, PhaseRule]:
 
 
 class CvodeSession:
-    """One CVODE integrator for a whole simulation; freed when the session ends."""
+    """One CVODE integrator for a whole simulation. `open` reuses an idle one of the same
+    model and method (a warm process then allocates nothing per run); `close` returns it."""
+
+    _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
+
+    @classmethod
+    def open(cls, model: CompiledModel, scene: Scene, atol: list[float]) -> "CvodeSession":
+        key = (model.spec, str(model.path), scene.solver.method)
+        try:
+            session = cls._idle.get(key, []).pop()
+        except IndexError:
+            return cls(model, scene, atol)
+        lib, ffi = model.lib, model.ffi
+        if lib.ig_solver_reset(session.solver, scene.solver.rtol, ffi.new("double[]", atol),
+                               scene.solver.max_steps) != 0:
+            raise SolverError(f"cannot reset the CVODE solver: {session._message()}")
+        return session
+
+    def close(self, scene: Scene) -> None:
+        """Hand the integrator back for the next run (only after a run that ended normally)."""
+        key = (self.model.spec, str(self.model.path), scene.solver.method)
+        self._idle.setdefault(key, []).append(self)
 
     def __init__(self, model: CompiledModel, scene: Scene, atol: list[float]):
         self.model = model
@@ -244,7 +265,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     residual = RESIDUAL_LAWS[residual_law]
     params = fill_params(model, scene, consts)
     free_atol = default_atol(scene, model.nstate)
-    session = CvodeSession(model, scene, free_atol)
+    session = CvodeSession.open(model, scene, free_atol)
     out_index = {name: i for i, name in enumerate(model.output_names)}
     analytic = bool(model.spec.jacobian)
 
@@ -282,6 +303,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     t_end = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
     if touching and rate0 <= 0 and scene.solver.t_end is None:
         # a degenerate start: touching, but moving along or away from the surface
+        session.close(scene)
         return _no_impact_at_start(scene, model, y, first, rate0, started)
 
     ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first_row], [(phase, 1)]
@@ -365,6 +387,7 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         outputs={name: col for name, col in zip(model.output_names, np.concatenate(outs).T)},
     )
     stats = session.stats()
+    session.close(scene)
     stats.update(segments=len(spans), samples=n_samples, wall_s=time.perf_counter() - started)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
 

@@ -87,6 +87,20 @@ int main(void)
     ig_stats st;
     ig_solver_stats(s, &st);
     EXPECT(st.nsteps > 0 && st.nfev > 0, "statistics counted");
+
+    /* reuse for a new run: the same segment again gives the same steps, counted afresh */
+    const double t_root = t_buf[n - 1];
+    EXPECT(ig_solver_reset(s, -1.0, atol, 100000) == IG_ERR_USAGE, "reset with rtol <= 0 refused");
+    EXPECT(ig_solver_reset(s, 1e-10, contact_atol, 100000) == 0, "solver reset");
+    ig_stats cleared;
+    ig_solver_stats(s, &cleared);
+    EXPECT(cleared.nsteps == 0 && cleared.nfev == 0, "reset clears the counters");
+    EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started after reset");
+    while ((flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots)) == IG_BUFFER_FULL) {}
+    ig_stats again;
+    ig_solver_stats(s, &again);
+    EXPECT(flag == IG_ROOT && t_buf[n - 1] == t_root, "same root after reset");
+    EXPECT(again.nsteps == st.nsteps && again.nfev == st.nfev, "same work after reset");
     ig_solver_free(s);
 
     /* too much work */

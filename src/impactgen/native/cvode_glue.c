@@ -43,6 +43,7 @@ struct ig_solver {
     int atol_changed; /* ig_solver_set_atol was called: pass the tolerances to CVODE */
     int analytic_in_use; /* the analytic Jacobian is set (else CVODE's difference quotients) */
     int initialised;  /* CVodeInit has been called */
+    int counted;      /* CVODE's counters belong to a run already reset: do not add them */
     int active;       /* a segment is under way */
     char message[512];
 };
@@ -105,7 +106,7 @@ static int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *u
 static void add_counters(const ig_solver *s, ig_stats *st)
 {
     long v;
-    if (!s->initialised) return;
+    if (!s->initialised || s->counted) return;
     if (CVodeGetNumSteps(s->cvode, &v) == CV_SUCCESS) st->nsteps += v;
     if (CVodeGetNumRhsEvals(s->cvode, &v) == CV_SUCCESS) st->nfev += v;
     if (CVodeGetNumJacEvals(s->cvode, &v) == CV_SUCCESS) st->njev += v;
@@ -201,6 +202,24 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
     return s;
 }
 
+int ig_solver_reset(ig_solver *s, double rtol, const double *atol, long max_steps)
+{
+    if (!(rtol > 0.0) || max_steps <= 0) {
+        set_message(s, "ig_solver_reset: rtol and max_steps must be positive");
+        return IG_ERR_USAGE;
+    }
+    const int flag = ig_solver_set_atol(s, atol);
+    if (flag != 0) return flag;
+    if (s->jac && ig_solver_use_jacobian(s, 1) != 0) return IG_ERR_SOLVER;
+    s->rtol = rtol;
+    s->max_steps = max_steps;
+    s->active = 0;
+    s->counted = 1;
+    memset(&s->total, 0, sizeof s->total);
+    s->message[0] = '\0';
+    return 0;
+}
+
 int ig_solver_set_atol(ig_solver *s, const double *atol)
 {
     double *a = N_VGetArrayPointer(s->abstol);
@@ -245,6 +264,7 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
         }
     }
     add_counters(s, &s->total);
+    s->counted = 0;
     s->params = params;
     s->nevents = nevents;
     for (int k = 0; k < nevents; ++k) s->events[k] = events[k];
