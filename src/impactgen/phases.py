@@ -123,7 +123,7 @@ class CvodeSession:
     def segment(self, params, phase: str, t0: float, y0: np.ndarray, t_stop: float,
                 events: tuple[tuple[str, int], ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """Integrate from (t0, y0) until an event or t_stop; return samples and fired events."""
-        ffi, lib, model = self.model.ffi, self.model.lib, self.model
+        lib = self.model.lib
         for k, (name, direction) in enumerate(events):
             self.event_idx[k] = self.event_index[name]
             self.event_dirs[k] = direction
