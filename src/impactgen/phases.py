@@ -72,11 +72,14 @@ class CvodeSession:
 
     _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
 
+    @staticmethod
+    def _pool_key(model: CompiledModel, scene: Scene) -> tuple:
+        return model.spec, str(model.path), scene.solver.method
+
     @classmethod
     def open(cls, model: CompiledModel, scene: Scene, atol: list[float]) -> "CvodeSession":
-        key = (model.spec, str(model.path), scene.solver.method)
         try:
-            session = cls._idle.get(key, []).pop()
+            session = cls._idle.get(cls._pool_key(model, scene), []).pop()
         except IndexError:
             return cls(model, scene, atol)
         lib, ffi = model.lib, model.ffi
@@ -87,8 +90,7 @@ class CvodeSession:
 
     def close(self, scene: Scene) -> None:
         """Hand the integrator back for the next run (only after a run that ended normally)."""
-        key = (self.model.spec, str(self.model.path), scene.solver.method)
-        self._idle.setdefault(key, []).append(self)
+        self._idle.setdefault(self._pool_key(self.model, scene), []).append(self)
 
     def __init__(self, model: CompiledModel, scene: Scene, atol: list[float]):
         self.model = model
