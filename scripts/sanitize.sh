@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Memory safety of the C: build the model and the CVODE glue with AddressSanitizer and
 # UndefinedBehaviorSanitizer, then
-#   1. run the glue driver (tests/c/glue_driver.c: every path, errors included) with
-#      LeakSanitizer on: any leak, overflow or undefined behaviour fails;
+#   1. run the glue driver (tests/c/glue_driver.c: every path, errors included) and the
+#      kernels driver (tests/c/kernels_driver.c) with LeakSanitizer on: any leak, overflow
+#      or undefined behaviour fails;
 #   2. run the simulation tests with the instrumented cffi extension loaded into Python.
 # Usage: scripts/sanitize.sh [pytest arguments]   (run after 'make setup')
 set -euo pipefail
@@ -24,7 +25,7 @@ work = Path(sys.argv[1])
 gen = generate_model(ModelSpec(2))
 (work / "model.h").write_text(gen.header)
 (work / "model.c").write_text(gen.source)
-for name in ("cvode_glue.c", "cvode_glue.h"):
+for name in ("cvode_glue.c", "cvode_glue.h", "small_kernels.c", "small_kernels.h"):
     (work / name).write_text(_native(name))
 PY
 inc=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); print(s.include_dir)')
@@ -32,8 +33,13 @@ libdir=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); p
 libs=$("$PY" -c 'from impactgen.sundials import find_sundials as f; print(" ".join("-l" + l for l in f().libraries))')
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
     -fno-sanitize-recover=undefined -I"$work" -I"$inc" "$work/model.c" "$work/cvode_glue.c" \
-    tests/c/glue_driver.c ${libdir:+-L"$libdir" -Wl,-rpath,"$libdir"} $libs -lm -o "$work/driver"
+    "$work/small_kernels.c" tests/c/glue_driver.c ${libdir:+-L"$libdir" -Wl,-rpath,"$libdir"} $libs -lm \
+    -o "$work/driver"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/driver"
+"$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
+    -fno-sanitize-recover=undefined -I"$work" -I"$inc" "$work/small_kernels.c" tests/c/kernels_driver.c \
+    ${libdir:+-L"$libdir" -Wl,-rpath,"$libdir"} $libs -lm -o "$work/kernels"
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/kernels"
 
 echo "sanitize: 2/2 simulation tests with the instrumented extension"
 asan=$("$CC" -print-file-name=libasan.so)

@@ -37,7 +37,7 @@ from .sundials import Sundials, find_sundials
 COMPILE_ARGS = ("-O2",)
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
-GLUE_FILES = ("cvode_glue.c", "cvode_glue.h")
+GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "small_kernels.c", "small_kernels.h")
 MANIFEST = "manifest.json"
 
 
@@ -160,7 +160,7 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
     ffi.set_source(
         module_name,
         '#include "model.h"\n#include "cvode_glue.h"\n',
-        sources=[str(workdir / "model.c"), str(workdir / "cvode_glue.c")],
+        sources=[str(workdir / name) for name in ("model.c", *GLUE_FILES) if name.endswith(".c")],
         include_dirs=[str(workdir), sundials.include_dir],
         library_dirs=lib_dirs,
         runtime_library_dirs=lib_dirs,

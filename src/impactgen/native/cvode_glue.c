@@ -16,6 +16,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "cvode_glue.h"
+#include "small_kernels.h"
 
 #ifndef SUNDIALS_VERSION_MAJOR
 #error "SUNDIALS_VERSION_MAJOR is not defined: impactgen needs SUNDIALS 6 or 7"
@@ -157,6 +158,7 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         if (s->y) N_VEnableFusedOps_Serial(s->y, SUNTRUE);
         if (s->y) s->A = SUNDenseMatrix(MODEL_NSTATE, MODEL_NSTATE, s->ctx);
         if (s->A) s->LS = SUNLinSol_Dense(s->y, s->A, s->ctx);
+        if (s->LS) ig_use_small_kernels(s->y, s->A, s->LS);
         s->cvode = CVodeCreate(method == 0 ? CV_BDF : CV_ADAMS, s->ctx);
         if (!s->y || !s->abstol || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
     }
