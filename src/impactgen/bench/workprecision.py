@@ -36,7 +36,7 @@ class Settings:
     min_time_s: float = 0.25  # a fast contender repeats until its runs add up to this (at most MAX_REPEATS)
 
 
-QUICK = Settings(tuple(10.0 ** -k for k in range(3, 11)), 3, 200_000, 2.0, ("paper", "chain3"))
+QUICK = Settings(tuple(10.0 ** -k for k in range(3, 13)), 3, 200_000, 2.0, ("paper", "chain3"))
 FULL = Settings(tuple(10.0 ** (-k / 2) for k in range(6, 25)), 5, 2_000_000, 20.0, ("paper", "chain3", "chain6"))
 
 
