@@ -18,14 +18,14 @@ echo "sanitize: 1/2 glue driver under ASan + UBSan + LeakSanitizer"
 "$PY" - "$work" <<'PY'
 import sys
 from pathlib import Path
-from impactgen.build import _native
+from impactgen.build import GLUE_FILES, _native
 from impactgen.codegen.emit import generate_model
 from impactgen.codegen.expressions import ModelSpec
 work = Path(sys.argv[1])
 gen = generate_model(ModelSpec(2))
 (work / "model.h").write_text(gen.header)
 (work / "model.c").write_text(gen.source)
-for name in ("cvode_glue.c", "cvode_glue.h", "small_kernels.c", "small_kernels.h"):
+for name in GLUE_FILES:
     (work / name).write_text(_native(name))
 PY
 inc=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); print(s.include_dir)')
