@@ -12,7 +12,7 @@
  * the unit lower triangle L below the diagonal of M, and dinv[j] = 1 / D_j. No square roots
  * and one division per pivot, which matter at this size. Returns nonzero if M is not
  * positive definite. */
-static int ldl_factor(double *M, double *dinv)
+static inline int ldl_factor(double *M, double *dinv)
 {
     const int n = MODEL_NQ;
     double D[MODEL_NQ];
@@ -32,7 +32,7 @@ static int ldl_factor(double *M, double *dinv)
 }
 
 /* Solve L D L^T x = b in place, with the factors from ldl_factor. */
-static void ldl_solve(const double *L, const double *dinv, double *b)
+static inline void ldl_solve(const double *L, const double *dinv, double *b)
 {
     const int n = MODEL_NQ;
     for (int i = 0; i < n; ++i) {
@@ -47,7 +47,8 @@ static void ldl_solve(const double *L, const double *dinv, double *b)
     }
 }
 
-double model_normal_force(double delta, const model_params *p)
+/* The active normal-force law; inline so that the right-hand side pays no call for it. */
+static inline double normal_force(double delta, const model_params *p)
 {
     switch (p->phase) {
     case MODEL_PHASE_ELASTIC: {  /* Hertz elastic compression (Eq. 9) */
@@ -97,6 +98,11 @@ double model_normal_force(double delta, const model_params *p)
     default:  /* free flight */
         return 0.0;
     }
+}
+
+double model_normal_force(double delta, const model_params *p)
+{
+    return normal_force(delta, p);
 }
 
 /* dF/d(delta) of the active normal-force law, for the Jacobian. */
@@ -189,7 +195,7 @@ static int accelerations(const double *y, const model_params *p, double *udot, t
     const double v_By = L1*cos_q1*u1 + L2*cos_q2*u2 + L3*cos_q3*u3;
 
     /* contact forces */
-    const double F = model_normal_force(delta, p);
+    const double F = normal_force(delta, p);
     const double s = v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
     const double F_f = -F*mu*s;
 
@@ -331,7 +337,7 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double delta = -tip6 + y_s;
     const double delta_rate = -tip7;
 
-    const double F = model_normal_force(delta, p);
+    const double F = normal_force(delta, p);
     const double s = v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
     const double F_f = -F*mu*s;
 
@@ -401,7 +407,7 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     const double v_Bx = -tip0*u1 - tip1*u2 - tip2*u3;
     const double v_By = L1*cos_q1*u1 + L2*cos_q2*u2 + L3*cos_q3*u3;
 
-    const double F = model_normal_force(delta, p);
+    const double F = normal_force(delta, p);
     const double dF = normal_force_slope(delta, p);
     const double s = v_Bx/sqrt((eps*eps) + (v_Bx*v_Bx));
     const double F_f = -F*mu*s;
