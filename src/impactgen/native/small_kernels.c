@@ -14,8 +14,10 @@
 
 #if SUNDIALS_VERSION_MAJOR >= 7
 typedef SUNErrCode ig_code; /* what SUNDIALS 7 ops return */
+#define IG_LS_SUCCESS SUN_SUCCESS /* 7 dropped SUNLS_SUCCESS for the common code */
 #else
 typedef int ig_code;
+#define IG_LS_SUCCESS SUNLS_SUCCESS
 #endif
 
 #define DATA(v) NV_DATA_S(v)
@@ -237,7 +239,7 @@ static int dense_setup(SUNLinearSolver S, SUNMatrix A)
     SUNLinearSolverContent_Dense c = dense_content(S);
     if (SM_ROWS_D(A) != c->N || SM_COLUMNS_D(A) != c->N) return SUNLinSolSetup_Dense(S, A);
     c->last_flag = lu_factor(SM_COLS_D(A), c->N, c->pivots);
-    return c->last_flag > 0 ? SUNLS_LUFACT_FAIL : SUNLS_SUCCESS;
+    return c->last_flag > 0 ? SUNLS_LUFACT_FAIL : IG_LS_SUCCESS;
 }
 
 static int dense_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, sunrealtype tol)
@@ -247,8 +249,8 @@ static int dense_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, s
         return SUNLinSolSolve_Dense(S, A, x, b, tol);
     if (x != b) memcpy(DATA(x), DATA(b), sizeof(sunrealtype) * (size_t)c->N);
     lu_solve(SM_COLS_D(A), c->N, c->pivots, DATA(x));
-    c->last_flag = SUNLS_SUCCESS;
-    return SUNLS_SUCCESS;
+    c->last_flag = IG_LS_SUCCESS;
+    return IG_LS_SUCCESS;
 }
 
 void ig_use_small_kernels(N_Vector y, SUNMatrix A, SUNLinearSolver LS)
