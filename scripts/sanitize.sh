@@ -28,17 +28,14 @@ gen = generate_model(ModelSpec(2))
 for name in GLUE_FILES:
     (work / name).write_text(_native(name))
 PY
-inc=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); print(s.include_dir)')
-libdir=$("$PY" -c 'from impactgen.sundials import find_sundials as f; s = f(); print(s.library_dir or "")')
-libs=$("$PY" -c 'from impactgen.sundials import find_sundials as f; print(" ".join("-l" + l for l in f().libraries))')
+sundials=$("$PY" -c 'from impactgen.sundials import find_sundials as f; print(" ".join(f().cc_args()))')
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
-    -fno-sanitize-recover=undefined -I"$work" -I"$inc" "$work/model.c" "$work/cvode_glue.c" \
-    "$work/small_kernels.c" tests/c/glue_driver.c ${libdir:+-L"$libdir" -Wl,-rpath,"$libdir"} $libs -lm \
-    -o "$work/driver"
+    -fno-sanitize-recover=undefined -I"$work" "$work/model.c" "$work/cvode_glue.c" \
+    "$work/small_kernels.c" tests/c/glue_driver.c $sundials -lm -o "$work/driver"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/driver"
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
-    -fno-sanitize-recover=undefined -I"$work" -I"$inc" "$work/small_kernels.c" tests/c/kernels_driver.c \
-    ${libdir:+-L"$libdir" -Wl,-rpath,"$libdir"} $libs -lm -o "$work/kernels"
+    -fno-sanitize-recover=undefined -I"$work" "$work/small_kernels.c" tests/c/kernels_driver.c \
+    $sundials -lm -o "$work/kernels"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/kernels"
 
 echo "sanitize: 2/2 simulation tests with the instrumented extension"

@@ -19,11 +19,9 @@ def test_small_kernels_agree_with_sundials_bit_for_bit(tmp_path):
     for name in ("small_kernels.c", "small_kernels.h"):
         (tmp_path / name).write_text(_native(name))
     sundials = find_sundials()
-    libdir = [f"-L{sundials.library_dir}", f"-Wl,-rpath,{sundials.library_dir}"] if sundials.library_dir else []
     build = subprocess.run([CC, "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{tmp_path}",
-                            f"-I{sundials.include_dir}", str(ROOT / "tests" / "c" / "kernels_driver.c"),
-                            str(tmp_path / "small_kernels.c"), *libdir,
-                            *(f"-l{lib}" for lib in sundials.libraries), "-lm", "-o", str(tmp_path / "driver")],
+                            str(ROOT / "tests" / "c" / "kernels_driver.c"), str(tmp_path / "small_kernels.c"),
+                            *sundials.cc_args(), "-lm", "-o", str(tmp_path / "driver")],
                            capture_output=True, text=True)
     assert build.returncode == 0, build.stderr
     run = subprocess.run([str(tmp_path / "driver")], capture_output=True, text=True, timeout=60)

@@ -102,7 +102,7 @@ def build_key(spec: ModelSpec, sundials: Sundials) -> str:
         "glue": [hashlib.sha256(_native(f).encode()).hexdigest() for f in GLUE_FILES],
         "flags": build_flags(),
         "compiler": [os.environ.get(v, "") for v in ("CC", "CFLAGS", "LDFLAGS", "LDSHARED")],
-        "sundials": [sundials.version, sundials.include_dir, sundials.library_dir, sundials.libraries],
+        "sundials": [sundials.version, sundials.include_dirs, sundials.library_dirs, sundials.libraries],
         "python": [sys.implementation.cache_tag, sysconfig.get_config_var("EXT_SUFFIX"),
                    sysconfig.get_platform()],
         "cffi": cffi.__version__,
@@ -156,14 +156,13 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
         (workdir / name).write_text(_native(name))
     ffi = cffi.FFI()
     ffi.cdef(gen.cdef + _glue_cdef())
-    lib_dirs = [sundials.library_dir] if sundials.library_dir else []
     ffi.set_source(
         module_name,
         '#include "model.h"\n#include "cvode_glue.h"\n',
         sources=[str(workdir / name) for name in ("model.c", *GLUE_FILES) if name.endswith(".c")],
-        include_dirs=[str(workdir), sundials.include_dir],
-        library_dirs=lib_dirs,
-        runtime_library_dirs=lib_dirs,
+        include_dirs=[str(workdir), *sundials.include_dirs],
+        library_dirs=list(sundials.library_dirs),
+        runtime_library_dirs=list(sundials.library_dirs),
         libraries=list(sundials.libraries) + ["m"],
         extra_compile_args=list(build_flags()[0]),
         extra_link_args=list(build_flags()[1]),

@@ -19,16 +19,28 @@ INSTALL_HINT = (
 )
 
 
+MPI_HINT = (
+    "install the MPI development files it was built with (Debian/Ubuntu: 'sudo apt-get install "
+    "mpi-default-dev'; conda: 'conda install -c conda-forge openmpi'), or set SUNDIALS_DIR to a "
+    "SUNDIALS built without MPI"
+)
+
+
 @dataclass(frozen=True)
 class Sundials:
     version: str
-    include_dir: str
-    library_dir: str | None  # None: the compiler's default search path
-    libraries: tuple[str, ...]
+    include_dirs: tuple[str, ...]  # SUNDIALS' own first, then MPI's if its headers need mpi.h
+    library_dirs: tuple[str, ...]  # empty: the compiler's default search path
+    libraries: tuple[str, ...]  # in link order
 
     @property
     def major(self) -> int:
         return int(self.version.split(".")[0])
+
+    def cc_args(self) -> list[str]:
+        """-I, -L, rpath and -l flags for a plain compiler command (test drivers, scripts)."""
+        return ([f"-I{d}" for d in self.include_dirs] + [f"-L{d}" for d in self.library_dirs]
+                + [f"-Wl,-rpath,{d}" for d in self.library_dirs] + [f"-l{lib}" for lib in self.libraries])
 
 
 def _prefixes() -> list[Path]:
@@ -42,17 +54,33 @@ def _prefixes() -> list[Path]:
     return out
 
 
-def _pkg_config_include() -> list[Path]:
+def _pkg_config(package: str, *what: str) -> list[str] | None:
+    """The flags pkg-config gives for `package`, or None when it does not know it."""
     if not shutil.which("pkg-config"):
-        return []
+        return None
     try:
-        res = subprocess.run(["pkg-config", "--cflags-only-I", "sundials-cvode"],
-                             capture_output=True, text=True, timeout=10)
+        res = subprocess.run(["pkg-config", *what, package], capture_output=True, text=True, timeout=10)
     except (OSError, subprocess.SubprocessError):
-        return []
-    if res.returncode != 0:
-        return []
-    return [Path(flag[2:]) for flag in res.stdout.split() if flag.startswith("-I")]
+        return None
+    return res.stdout.split() if res.returncode == 0 else None
+
+
+def _pkg_config_include() -> list[Path]:
+    flags = _pkg_config("sundials-cvode", "--cflags-only-I") or []
+    return [Path(flag[2:]) for flag in flags if flag.startswith("-I")]
+
+
+def _mpi(include: Path, lib_dir: Path) -> tuple[list[str], list[str], list[str]] | None:
+    """Include dirs, library dirs and libraries of MPI, for a SUNDIALS 7 built with it: its
+    sundials_types.h includes mpi.h, and SUN_COMM_NULL is MPI_COMM_NULL, which OpenMPI
+    defines through a symbol of libmpi. None when no MPI development files are found."""
+    if (include / "mpi.h").is_file():  # conda and hand-made prefixes: MPI beside SUNDIALS
+        return [], [], ["mpi"] if any(lib_dir.glob("libmpi.*")) else []
+    for package in ("mpi", "ompi-c", "mpich"):
+        flags = _pkg_config(package, "--cflags", "--libs")
+        if flags is not None:
+            return tuple([f[2:] for f in flags if f.startswith(kind)] for kind in ("-I", "-L", "-l"))
+    return None
 
 
 def _library_dir(prefix: Path, name: str) -> Path | None:
@@ -79,7 +107,8 @@ def find_sundials() -> Sundials:
         looked.append(str(include))
         if not (include / "cvode" / "cvode.h").is_file() or not config.is_file():
             continue
-        match = re.search(r'#define\s+SUNDIALS_VERSION\s+"([0-9.]+)', config.read_text(errors="replace"))
+        text = config.read_text(errors="replace")
+        match = re.search(r'#define\s+SUNDIALS_VERSION\s+"([0-9.]+)', text)
         if not match:
             continue
         version = match.group(1)
@@ -99,6 +128,16 @@ def find_sundials() -> Sundials:
             raise BuildError(f"SUNDIALS {version} in {prefix} lacks {', '.join(missing)}; "
                              f"{INSTALL_HINT}")
         system = str(lib_dir).startswith(("/usr/lib", "/lib"))
-        return Sundials(version, str(include), None if system else str(lib_dir), tuple(libs))
+        include_dirs, library_dirs = [str(include)], [] if system else [str(lib_dir)]
+        if major >= 7 and re.search(r"#define\s+SUNDIALS_MPI_ENABLED\s+1", text):
+            mpi = _mpi(include, lib_dir)
+            if mpi is None:
+                raise BuildError(f"SUNDIALS {version} in {prefix} was built with MPI, so its headers "
+                                 f"include mpi.h, and no MPI was found (looked in {include} and asked "
+                                 f"pkg-config for mpi, ompi-c and mpich); {MPI_HINT}")
+            include_dirs += mpi[0]
+            library_dirs += [d for d in mpi[1] if d not in library_dirs]
+            libs += mpi[2]
+        return Sundials(version, tuple(include_dirs), tuple(library_dirs), tuple(libs))
     raise BuildError(f"SUNDIALS CVODE not found (looked for cvode/cvode.h under "
                      f"{', '.join(dict.fromkeys(looked))}); {INSTALL_HINT}")
