@@ -4,7 +4,7 @@
 VENV ?= .venv
 STAMP := $(VENV)/.impactgen-installed
 
-.PHONY: setup demo test clean
+.PHONY: setup demo test check-sundials7 clean
 
 setup: $(STAMP)
 
@@ -18,6 +18,10 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(VENV)/bin/python -m pytest -q
+
+# SUNDIALS 7 from Debian unstable, unpacked in a temporary folder (docs/safety.md)
+check-sundials7: $(STAMP)
+	PYTHON=$(VENV)/bin/python ./scripts/check_sundials7.sh
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
