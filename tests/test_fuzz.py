@@ -10,7 +10,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import impactgen
@@ -180,16 +180,19 @@ def extreme_scenes(draw):
                     "u": [draw(st.floats(-1e3, 1e3)) for _ in range(n)]},
         "solver": {"max_steps": 3000, "t_max": 0.01, "method": draw(st.sampled_from(["bdf", "adams"]))},
     }
-    return impactgen.scene_from_dict(raw)
+    try:
+        return impactgen.scene_from_dict(raw)
+    except impactgen.SceneError as exc:  # a chain that starts below the surface is not a scene
+        assume(exc.key != "initial.q")
+        raise
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
 @given(extreme_scenes())
 def test_extreme_valid_scenes_end_in_a_finite_result_or_a_solver_error(scene):
-    try:
-        result = impactgen.simulate(scene)
-    except impactgen.SolverError as exc:
-        assert "solver failed" in str(exc) and "\n" not in str(exc)
+    result = impactgen.simulate(scene)
+    if result.status == "failed":  # a failure is a result: its reason, and finite samples
+        assert "solver failed" in result.message and "\n" not in result.message
         return
     s = result.summary
     assert result.status in ("ok", "no-impact")

@@ -59,7 +59,8 @@ def _mutate(path: str, value) -> dict:
     ("chain.mass", KeyError, "chain.mass", "missing"),
     ("chain.mass", "heavy", "chain.mass", "expected a number"),
     ("chain.mass", -1.0, "chain.mass", "> 0"),
-    ("chain.mass", [1.0, 0.0], "chain.mass[1]", "> 0"),
+    ("chain.mass", [1.0, 0.0], "chain.mass[2]", "> 0"),  # elements count from 1
+    ("contact.friction", KeyError, "contact.friction", "missing required key"),
     ("chain.length", [1.0], "chain.length", "2 values"),
     ("chain.links", 2.5, "chain.links", "integer"),
     ("chain.links", 0, "chain.links", "between 1 and 60"),

@@ -1,7 +1,8 @@
 """Scene files: read a TOML description of a chain and a surface, check it, and freeze it.
 
 The schema below is the single statement of the scene format (docs/scene.md mirrors it):
-every key with its type, default and physical check. Every error names the key.
+every key with its type, default and physical check. Every error names the key. Elements of
+a list-valued key are named from 1, as the links are numbered: `initial.u[2]` is omega20.
 """
 from __future__ import annotations
 
@@ -31,6 +32,9 @@ JACOBIANS = ("auto", "analytic", "difference")
 JACOBIAN_AUTO_MAX_LINKS = 6
 
 _MISSING = object()
+# A tip (or joint) this far below the surface, relative to the chain's length (at least
+# 1 m), still counts as touching it: the rounding of a height summed over the links.
+TOUCH_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -68,6 +72,7 @@ class Solver:
     t_max: float  # longest free flight to wait for a first contact when t_end is None
     max_steps: int
     sustained_contact: bool = True  # with t_end a time: hold the tip once impacts chatter
+    jacobian_setting: str = "auto"  # the key as given, before "auto" was resolved into `jacobian`
 
 
 @dataclass(frozen=True)
@@ -90,8 +95,67 @@ class Scene:
     def n(self) -> int:
         return self.chain.links
 
-    def replace(self, **changes: Any) -> "Scene":
-        return dataclasses.replace(self, **changes)
+    def replace(self, overrides: Mapping[str, Any] | None = None, **fields: Any) -> "Scene":
+        """A new scene with some values changed, checked like `load_scene`.
+
+        Parameters
+        ----------
+        overrides : mapping, optional
+            Dotted scene keys to new values, as in `load_scene` (``{"initial.u[2]": -0.3}``).
+        **fields
+            Whole fields of the dataclass (``solver=dataclasses.replace(scene.solver, ...)``).
+
+        Returns
+        -------
+        Scene
+            The checked scene. A change that leaves it inconsistent (three links with two
+            initial angles, a tip inside the surface) raises `SceneError` naming the key.
+        """
+        changed = dataclasses.replace(self, **fields) if fields else self
+        return scene_from_dict(changed.to_dict(), overrides, source=self.source)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as nested dicts of plain values, as a TOML file states it (angles in
+        radians): `scene_from_dict(scene.to_dict())` gives the same scene."""
+        s = self.solver
+        return {
+            "name": self.name,
+            "chain": {"links": self.chain.links, "length": list(self.chain.length),
+                      "mass": list(self.chain.mass), "gravity": self.chain.gravity},
+            "rod": {"E": self.rod.E, "nu": self.rod.nu, "yield_strength": self.rod.yield_strength,
+                    "tip_radius": self.tip_radius},
+            "surface": {"E": self.surface.E, "nu": self.surface.nu,
+                        "yield_strength": self.surface.yield_strength,
+                        "height": "initial" if self.surface_height is None else self.surface_height},
+            "contact": {"model": self.contact.model, "friction": self.contact.friction,
+                        "friction_mode": self.contact.friction_mode,
+                        "friction_eps": self.contact.friction_eps},
+            "initial": {"q": list(self.q0), "u": list(self.u0)},
+            "solver": {"method": s.method, "jacobian": s.jacobian_setting, "rtol": s.rtol,
+                       "atol": s.atol, "t_end": "separation" if s.t_end is None else s.t_end,
+                       "t_max": s.t_max, "max_steps": s.max_steps,
+                       "sustained_contact": s.sustained_contact},
+        }
+
+    def to_toml(self) -> str:
+        """The scene as a TOML file that `load_scene` reads back to the same scene."""
+        lines = [f"name = {_toml_value(self.name)}"]
+        for section, values in self.to_dict().items():
+            if isinstance(values, dict):
+                lines += ["", f"[{section}]"] + [f"{k} = {_toml_value(v)}" for k, v in values.items()]
+        return "\n".join(lines) + "\n"
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, float):
+        return repr(v)  # shortest repr that reads back to the same double
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    return str(v)
 
 
 # --------------------------------------------------------------------------- checks
@@ -148,7 +212,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "contact": {
         "model": Key("str", "three-phase", choices=CONTACT_MODELS),
-        "friction": Key("float", 0.0, _non_negative, doc="mu"),
+        "friction": Key("float", check=_non_negative,
+                        doc="mu, the Coulomb coefficient; 0 for a frictionless surface"),
         "friction_mode": Key("str", "regularized", choices=FRICTION_MODES),
         "friction_eps": Key("float", 1e-6, _positive, doc="m/s"),
     },
@@ -204,13 +269,13 @@ def _numbers(key: str, v: Any, n: int) -> tuple[float, ...]:
         raise SceneError(key, f"expected a list of {n} numbers, got {type(v).__name__} {v!r}")
     if len(v) != n:
         raise SceneError(key, f"expected {n} values (one per link), got {len(v)}")
-    return tuple(_number(f"{key}[{i}]", x) for i, x in enumerate(v))
+    return tuple(_number(f"{key}[{i}]", x) for i, x in enumerate(v, start=1))
 
 
 def _checked(key: str, value: Any, spec: Key) -> Any:
     values = value if isinstance(value, tuple) else (value,)
     if spec.check is not None:
-        for i, x in enumerate(values):
+        for i, x in enumerate(values, start=1):
             reason = spec.check(x)
             if reason:
                 where = f"{key}[{i}]" if isinstance(value, tuple) else key
@@ -278,17 +343,74 @@ def parse_override(text: str) -> tuple[str, Any]:
     return key, value
 
 
+INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
+
+
+def split_key(dotted: str) -> tuple[str, str, int | None]:
+    """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
+    raise SceneError for a key the schema does not have."""
+    index = None
+    match = INDEXED_KEY.match(dotted)
+    name = match["key"] if match else dotted
+    section, _, key = name.rpartition(".")
+    if section not in SCHEMA or key not in SCHEMA[section]:
+        raise SceneError(dotted, f"unknown key{_closest(name)}")
+    if match:
+        if SCHEMA[section][key].kind not in ("floats", "list"):
+            raise SceneError(dotted, f"{name} is not a list: give it without an index")
+        try:
+            index = int(match["index"])
+        except ValueError:
+            raise SceneError(dotted, f"the index must be a whole number from 1, got {match['index']!r}") from None
+        if index < 1:
+            raise SceneError(dotted, f"elements are numbered from 1 (as the links are), got {index}")
+    return section, key, index
+
+
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
     for dotted, value in overrides.items():
-        section, _, key = dotted.rpartition(".")
-        if section not in SCHEMA or key not in SCHEMA[section]:
-            raise SceneError(dotted, f"unknown key{_closest(dotted)}")
+        section, key, index = split_key(dotted)
         target = raw.setdefault(section, {}) if section else raw
         if not isinstance(target, dict):
             raise SceneError(section, "expected a table")
+        value = plain(value)
+        if index is not None:
+            value = _with_element(dotted, target, section, key, index, value)
         target[key] = value
-        if dotted in ("initial.q", "initial.q_deg"):  # one overrides the other
+        if key in ("q", "q_deg") and section == "initial":  # one overrides the other
             target.pop("q_deg" if key == "q" else "q", None)
+
+
+def _with_element(dotted: str, target: dict[str, Any], section: str, key: str, index: int,
+                  value: Any) -> list[Any]:
+    """The list of `section.key` with element `index` (from 1) set to `value`."""
+    current = target.get(key)
+    if current is None and section == "initial" and key in ("q", "q_deg"):
+        other = "q_deg" if key == "q" else "q"
+        raise SceneError(dotted, f"the scene gives initial.{other}, not initial.{key}: "
+                                 f"set initial.{other}[{index}] instead")
+    if current is None:
+        raise SceneError(dotted, f"the scene does not set {section}.{key}, so it has no element {index}")
+    if not isinstance(current, list):  # one number for every link (chain.length, chain.mass)
+        links = target.get("links")
+        if not isinstance(links, int) or isinstance(links, bool) or links < 1:
+            raise SceneError(dotted, "set chain.links before an element of a per-link list")
+        current = [current] * links
+    if index > len(current):
+        raise SceneError(dotted, f"index {index} is out of range: {section}.{key} has "
+                                 f"{len(current)} elements (one per link, numbered from 1)")
+    return [value if i == index - 1 else v for i, v in enumerate(current)]
+
+
+def plain(value: Any) -> Any:
+    """numpy scalars and arrays, and tuples, as the plain Python values TOML gives."""
+    if hasattr(value, "tolist") and callable(value.tolist):  # numpy array or scalar
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {k: plain(v) for k, v in value.items()}
+    return value
 
 
 def _read_sections(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
@@ -338,12 +460,13 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     if (q_deg is None) == (q_rad is None):
         raise SceneError("initial.q", "give exactly one of initial.q (rad) and initial.q_deg")
     q0 = q_rad if q_rad is not None else tuple(math.radians(a) for a in q_deg)
-    method, jacobian = get("solver", "method"), get("solver", "jacobian")
+    method, jacobian_setting = get("solver", "method"), get("solver", "jacobian")
+    jacobian = jacobian_setting
     if jacobian == "auto":
         jacobian = "analytic" if method == "bdf" and n <= JACOBIAN_AUTO_MAX_LINKS else "difference"
     solver = Solver(method, jacobian, get("solver", "rtol"), get("solver", "atol"),
                     get("solver", "t_end"), get("solver", "t_max"), get("solver", "max_steps"),
-                    get("solver", "sustained_contact"))
+                    get("solver", "sustained_contact"), jacobian_setting)
     scene = Scene(name, chain, rod, get("rod", "tip_radius"), surface,
                   get("surface", "height"), contact, q0, get("initial", "u", n), solver,
                   source=source)
@@ -351,40 +474,97 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     return scene
 
 
+def joint_heights(scene: Scene) -> list[float]:
+    """Heights of the pivot (0), of every joint and of the tip (last), in m, at the start."""
+    heights = [0.0]
+    for L, q in zip(scene.chain.length, scene.q0):
+        heights.append(heights[-1] + L * math.sin(q))
+    return heights
+
+
 def _check_physics(scene: Scene) -> None:
-    """Checks across keys: yield below modulus; the tip may touch the surface, not be in it."""
+    """Checks across keys: yield below modulus; the tip may touch the surface, not be in it;
+    no other point of the chain starts below the surface."""
     for section, mat in (("rod", scene.rod), ("surface", scene.surface)):
         if mat.yield_strength >= mat.E:
             raise SceneError(f"{section}.yield_strength", f"must be below {section}.E (a yield "
                              f"strain S_y/E = {mat.yield_strength / mat.E:.3g} >= 1 is not physical)")
-    if scene.surface_height is None:
-        return
-    y_tip = sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))
-    depth = scene.surface_height - y_tip
-    if depth > 1e-12 * max(1.0, sum(scene.chain.length)):
-        raise SceneError("surface.height", f"the tip starts {depth:.3g} m inside the surface "
-                         f"(tip at y = {y_tip:.6g} m, surface at {scene.surface_height:.6g} m); "
+    heights = joint_heights(scene)
+    y_tip = heights[-1]
+    slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
+    if scene.surface_height is not None and scene.surface_height - y_tip > slack:
+        raise SceneError("surface.height", f"the tip starts {scene.surface_height - y_tip:.3g} m inside "
+                         f"the surface (tip at y = {y_tip:.6g} m, surface at {scene.surface_height:.6g} m); "
                          "lower the surface or change initial.q")
+    y_s = y_tip if scene.surface_height is None else scene.surface_height
+    for link, (upper, lower) in enumerate(zip(heights[:-1], heights[1:]), start=1):
+        low = min(upper, lower if link < scene.n else upper)  # the tip itself may touch
+        if y_s - low > slack:
+            where = "its pivot end" if low == upper else "its lower end"
+            height = ' (surface.height = "initial" puts the surface at the tip)' \
+                if scene.surface_height is None else ""
+            raise SceneError("initial.q", f"link {link} starts below the surface: {where} is at "
+                             f"y = {low:.6g} m, the surface at y = {y_s:.6g} m{height}; every point "
+                             "of the chain must start on or above the surface, the tip at most touching it")
 
 
 def _deep_copy(raw: Mapping[str, Any]) -> dict[str, Any]:
-    return {k: _deep_copy(v) if isinstance(v, Mapping) else v for k, v in raw.items()}
+    return {k: _deep_copy(v) if isinstance(v, Mapping) else plain(v) for k, v in raw.items()}
 
 
 def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:
-    """Read and check a scene file; `overrides` maps dotted keys to values."""
+    """Read and check a scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A TOML scene file (docs/scene.md), or the name of a shipped example ("paper",
+        "bouncing", ...; see `impactgen examples`) when no file of that name exists.
+    overrides : mapping, optional
+        Dotted keys to values that replace the file's, e.g. ``{"initial.u": [-0.1, -0.3]}``
+        or one element, counted from 1 as the links are: ``{"initial.u[2]": -0.3}``.
+        numpy scalars and arrays are taken as plain numbers and lists.
+
+    Returns
+    -------
+    Scene
+        The checked, frozen scene (angles in radians).
+
+    Raises
+    ------
+    SceneError
+        The file cannot be read or is not TOML, or a key is unknown, missing, of the wrong
+        type or not physical; the message names the key.
+
+    Examples
+    --------
+    >>> import impactgen
+    >>> scene = impactgen.load_scene("paper", overrides={"initial.u[2]": -0.3})
+    >>> scene.n, scene.u0
+    (2, (-0.1, -0.3))
+    """
+    from .examples import example_text, find_example
     path = Path(path)
+    example = find_example(path)
+    if example is not None:
+        return scene_from_text(example_text(example), overrides, source=f"<example {example}>")
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise SceneError(None, f"scene file not found: {path}") from None
+        raise SceneError(None, f"scene file not found: {path} (a shipped example is named without "
+                               "a folder: see 'impactgen examples')") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(None, f"cannot read scene file {path}: {exc}") from None
+    return scene_from_text(text, overrides, source=str(path))
+
+
+def scene_from_text(text: str, overrides: Mapping[str, Any] | None = None, source: str = "<memory>") -> Scene:
+    """Check a scene given as TOML text."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(None, f"{path} is not valid TOML: {exc}") from None
-    return scene_from_dict(raw, overrides, source=str(path))
+        raise SceneError(None, f"{source} is not valid TOML: {exc}") from None
+    return scene_from_dict(raw, overrides, source=source)
 
 
 def steel_chain_scene(n: int) -> Scene:
