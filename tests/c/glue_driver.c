@@ -62,7 +62,7 @@ int main(void)
     /* a whole elastic phase through a 7-sample buffer: continuation, then the yield root */
     ig_solver *s = ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-10, atol, 100000, err, sizeof err);
     EXPECT(s != NULL, "solver created");
-    EXPECT(ig_segment_advance(s, t_buf, y_buf, 7, &n, roots) == IG_ERR_USAGE, "advance before start refused");
+    EXPECT(ig_segment_advance(s, t_buf, y_buf, NULL, 7, &n, roots) == IG_ERR_USAGE, "advance before start refused");
     const int bad_event[1] = {99};
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, bad_event, dirs, 1) == IG_ERR_USAGE, "bad event refused");
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 0.0, events, dirs, 2) == IG_ERR_USAGE, "t_stop <= t0 refused");
@@ -76,7 +76,7 @@ int main(void)
            "analytic Jacobian selected only if the model has it");
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started");
     int flag, fills = 0;
-    while ((flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots)) == IG_BUFFER_FULL) {
+    while ((flag = ig_segment_advance(s, t_buf, y_buf, NULL, 7, &n, roots)) == IG_BUFFER_FULL) {
         ig_outputs(&p, n, t_buf, y_buf, out);
         fills++;
     }
@@ -96,7 +96,7 @@ int main(void)
     ig_solver_stats(s, &cleared);
     EXPECT(cleared.nsteps == 0 && cleared.nfev == 0, "reset clears the counters");
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started after reset");
-    while ((flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots)) == IG_BUFFER_FULL) {}
+    while ((flag = ig_segment_advance(s, t_buf, y_buf, NULL, 7, &n, roots)) == IG_BUFFER_FULL) {}
     ig_stats again;
     ig_solver_stats(s, &again);
     EXPECT(flag == IG_ROOT && t_buf[n - 1] == t_root, "same root after reset");
@@ -106,7 +106,7 @@ int main(void)
     /* too much work */
     s = ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-10, atol, 5, err, sizeof err);
     EXPECT(ig_segment_start(s, &p, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started (max_steps 5)");
-    flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots);
+    flag = ig_segment_advance(s, t_buf, y_buf, NULL, 7, &n, roots);
     EXPECT(flag == IG_ERR_TOO_MUCH_WORK && strstr(ig_solver_message(s), "max_steps"), "too much work reported");
     ig_solver_free(s);
 
@@ -116,7 +116,7 @@ int main(void)
     y0[0] -= 0.001;  /* start inside the surface so that the force is evaluated */
     s = ig_solver_new(0, MODEL_HAS_JACOBIAN, 1e-10, atol, 100000, err, sizeof err);
     EXPECT(ig_segment_start(s, &bad, 0.0, y0, 1.0, events, dirs, 2) == 0, "segment started (NaN)");
-    do { flag = ig_segment_advance(s, t_buf, y_buf, 7, &n, roots); } while (flag == IG_BUFFER_FULL);
+    do { flag = ig_segment_advance(s, t_buf, y_buf, NULL, 7, &n, roots); } while (flag == IG_BUFFER_FULL);
     EXPECT(flag == IG_ERR_SOLVER && ig_solver_message(s)[0], "solver failure reported");
     ig_solver_free(s);
     ig_solver_free(NULL);

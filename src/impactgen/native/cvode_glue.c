@@ -30,6 +30,7 @@ struct ig_solver {
     void *cvode;
     N_Vector y;
     N_Vector abstol;
+    N_Vector dky;     /* one derivative of the interpolating polynomial (dense output) */
     SUNMatrix A;
     SUNLinearSolver LS;
     const model_params *params;
@@ -46,6 +47,7 @@ struct ig_solver {
     int initialised;  /* CVodeInit has been called */
     int counted;      /* CVODE's counters belong to a run already reset: do not add them */
     int active;       /* a segment is under way */
+    int dense_terms;  /* Taylor coefficients per sample of dense output: max order + 1 */
     char message[512];
 };
 
@@ -125,6 +127,7 @@ void ig_solver_free(ig_solver *s)
     if (s->A) SUNMatDestroy(s->A);
     if (s->y) N_VDestroy(s->y);
     if (s->abstol) N_VDestroy(s->abstol);
+    if (s->dky) N_VDestroy(s->dky);
     if (s->ctx) SUNContext_Free(&s->ctx);
     free(s->jac);
     free(s);
@@ -154,13 +157,15 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
 #endif
         s->y = N_VNew_Serial(MODEL_NSTATE, s->ctx);
         s->abstol = N_VNew_Serial(MODEL_NSTATE, s->ctx);
+        s->dky = N_VNew_Serial(MODEL_NSTATE, s->ctx);
         /* fused vector operations: fewer calls per step for CVODE's vectors, cloned from y */
         if (s->y) N_VEnableFusedOps_Serial(s->y, SUNTRUE);
         if (s->y) s->A = SUNDenseMatrix(MODEL_NSTATE, MODEL_NSTATE, s->ctx);
         if (s->A) s->LS = SUNLinSol_Dense(s->y, s->A, s->ctx);
         if (s->LS) ig_use_small_kernels(s->y, s->A, s->LS);
         s->cvode = CVodeCreate(method == 0 ? CV_BDF : CV_ADAMS, s->ctx);
-        if (!s->y || !s->abstol || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
+        s->dense_terms = (method == 0 ? IG_BDF_MAX_ORDER : IG_ADAMS_MAX_ORDER) + 1;
+        if (!s->y || !s->abstol || !s->dky || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
     }
     if (!failed) {
         double *a = N_VGetArrayPointer(s->abstol);
@@ -291,8 +296,40 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
     return 0;
 }
 
-int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, int capacity,
-                       int *n_written, int *roots_found)
+/* The Taylor coefficients y^(k)(t) / k!, k = 0 .. dense_terms - 1, of CVODE's interpolating
+ * polynomial of the last step, at t (zero past the order the step used). The polynomial has
+ * that order, so the expansion reproduces it exactly over the step [t_n - h_u, t_n]. */
+static int write_dense(ig_solver *s, double t, double *out)
+{
+    int order = 0;
+    if (CVodeGetLastOrder(s->cvode, &order) != CV_SUCCESS) return -1;
+    const double *dky = N_VGetArrayPointer(s->dky);
+    double factorial = 1.0;
+    int failed = 0;
+    for (int k = 0; k < s->dense_terms; ++k) {
+        double *row = out + (size_t)k * MODEL_NSTATE;
+        if (k > order || failed) {
+            memset(row, 0, sizeof(double) * MODEL_NSTATE);
+            continue;
+        }
+        if (k > 0) factorial *= k;
+        if (CVodeGetDky(s->cvode, t, k, s->dky) != CV_SUCCESS) {
+            failed = 1;
+            memset(row, 0, sizeof(double) * MODEL_NSTATE);
+            continue;
+        }
+        for (int i = 0; i < MODEL_NSTATE; ++i) row[i] = dky[i] / factorial;
+    }
+    return failed ? -1 : 0;
+}
+
+int ig_dense_terms(const ig_solver *s)
+{
+    return s->dense_terms;
+}
+
+int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense_buf,
+                       int capacity, int *n_written, int *roots_found)
 {
     *n_written = 0;
     if (!s->active) {
@@ -317,6 +354,12 @@ int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, int capacity,
         t_buf[*n_written] = t;
         memcpy(y_buf + (size_t)(*n_written) * MODEL_NSTATE, N_VGetArrayPointer(s->y),
                sizeof(double) * MODEL_NSTATE);
+        if (dense_buf != NULL &&
+            write_dense(s, t, dense_buf + (size_t)(*n_written) * s->dense_terms * MODEL_NSTATE) != 0) {
+            s->active = 0;
+            set_message(s, "CVodeGetDky could not give the interpolating polynomial of the step");
+            return IG_ERR_SOLVER;
+        }
         (*n_written)++;
         if (flag == CV_ROOT_RETURN) {
             CVodeGetRootInfo(s->cvode, roots_found);

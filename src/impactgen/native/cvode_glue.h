@@ -19,6 +19,9 @@
 #define IG_ERR_SOLVER -1     /* CVODE failed: ig_solver_message says why */
 #define IG_ERR_TOO_MUCH_WORK -2  /* more than max_steps steps in this segment */
 #define IG_ERR_USAGE -3      /* bad arguments (a bug in the caller) */
+/* CVODE's default maximum orders: dense output keeps max order + 1 coefficients a sample. */
+#define IG_BDF_MAX_ORDER 5
+#define IG_ADAMS_MAX_ORDER 12
 
 typedef struct ig_solver ig_solver;
 
@@ -64,9 +67,15 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
 
 /* Step until a root, t_stop or capacity samples. Each internal step (and the root or stop
  * point) is written as t_buf[k], y_buf[k * MODEL_NSTATE ...]. roots_found (nevents ints)
- * flags the events that fired on IG_ROOT. */
-int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, int capacity,
-                       int *n_written, int *roots_found);
+ * flags the events that fired on IG_ROOT. dense_buf, if not NULL, receives per sample
+ * ig_dense_terms(s) rows of MODEL_NSTATE Taylor coefficients c_j = y^(j)(t_k) / j! of
+ * CVODE's interpolating polynomial of that step: y(t) = sum_j c_j (t - t_k)^j holds for
+ * t_(k-1) <= t <= t_k (dense output, as solve_ivp's dense_output). */
+int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense_buf,
+                       int capacity, int *n_written, int *roots_found);
+
+/* Rows of Taylor coefficients per sample of dense output (the method's max order + 1). */
+int ig_dense_terms(const ig_solver *s);
 
 /* Counters accumulated over all segments of this solver. */
 void ig_solver_stats(const ig_solver *s, ig_stats *stats);
