@@ -9,7 +9,6 @@ import sys
 import pytest
 
 import impactgen
-from impactgen.errors import SolverError
 from conftest import PAPER, ROOT
 
 SANITIZED = bool(os.environ.get("IMPACTGEN_SANITIZE"))
@@ -35,8 +34,7 @@ def test_thousand_simulations_do_not_grow_memory(paper_scene):
     def batch(count: int) -> None:
         for _ in range(count):
             impactgen.simulate(paper_scene)
-            with pytest.raises(SolverError):  # the error path frees CVODE too
-                impactgen.simulate(failing)
+            assert not impactgen.simulate(failing).success  # the error path frees CVODE too
 
     batch(100)  # warm up: the model is loaded, numpy and the allocator settle
     before = _rss_bytes()
@@ -52,7 +50,7 @@ def test_thousand_simulations_do_not_grow_memory(paper_scene):
 def test_glue_and_simulations_are_clean_under_sanitizers():
     res = subprocess.run(["bash", str(ROOT / "scripts" / "sanitize.sh"), "-k",
                           "matches_the_paper or no_phase_ends or free_flight or hertz_model or stuck_tip "
-                          "or static_equilibrium"],
+                          "or static_equilibrium or t_eval_samples or partial_trajectory"],
                          capture_output=True, text=True, timeout=900,
                          env={**os.environ, "PYTHON": sys.executable})
     output = res.stdout + res.stderr

@@ -126,9 +126,9 @@ def test_later_impacts_start_again_on_the_original_surface():
     assert spans_are_contiguous(result) and all(p.t1 > p.t0 for p in result.phases)
     for impact in result.impacts:
         assert result.delta[impact.i_start] == pytest.approx(0.0, abs=1e-12)
-        assert 0 <= impact.delta_r < impact.delta_m
+        assert 0 <= impact.delta_r < impact.delta_max
     # each impact dissipates: the next one is gentler
-    assert result.impacts[1].delta_m < result.impacts[0].delta_m
+    assert result.impacts[1].delta_max < result.impacts[0].delta_max
     assert result.t[-1] == pytest.approx(0.2)
     E = result.T + result.V - result.W_normal - result.W_friction
     assert np.max(np.abs(E - E[0])) < 1e-6

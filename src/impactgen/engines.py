@@ -1,12 +1,25 @@
-"""The front door: from a checked scene to a result, with the engine of one's choice."""
+"""The front door: from a checked scene to a result, with the engine of one's choice.
+
+Every option is checked against the engine before any work (no model is built for an
+option that will be refused), and the solver settings override the scene's own.
+"""
 from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
 
 from .codegen.expressions import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
+from .scene import METHODS as C_METHODS
 from .scene import Scene
 
 ENGINES = ("c", "reference")
+# simulate()'s solver settings, and the scene keys they override (both engines take them)
+SOLVER_OPTIONS = {"rtol": "solver.rtol", "atol": "solver.atol", "max_steps": "solver.max_steps",
+                  "t_end": "solver.t_end"}
+OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output")
 
 
 def model_spec(scene: Scene) -> ModelSpec:
@@ -16,13 +29,119 @@ def model_spec(scene: Scene) -> ModelSpec:
     return ModelSpec(scene.n, scene.contact.model, friction, scene.solver.jacobian == "analytic", sustained)
 
 
-def simulate(scene: Scene, engine: str = "c", **options) -> SimulationResult:
-    """Run `scene` to separation (or to solver.t_end) and return the result."""
+def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,
+             atol: float | None = None, max_steps: int | None = None, t_end: float | str | None = None,
+             t_eval: Any = None, dense_output: bool = False, **unknown: Any) -> SimulationResult:
+    """Simulate `scene` to its first separation, or to `solver.t_end`, and return the result.
+
+    Parameters
+    ----------
+    scene : Scene
+        A checked scene (`load_scene`, `scene_from_dict`).
+    engine : {"c", "reference"}, default "c"
+        "c": the generated C model under SUNDIALS CVODE (built on first use, then cached).
+        "reference": the independent pure-Python engine on scipy's solve_ivp.
+    method : str, optional
+        The integrator. C engine: "bdf" or "adams" (default: the scene's solver.method).
+        Reference engine: a solve_ivp method, "Radau" (default), "BDF", "LSODA", "DOP853"
+        or "RK45".
+    rtol, atol : float, optional
+        Tolerances, overriding solver.rtol and solver.atol.
+    max_steps : int, optional
+        Steps allowed per phase, overriding solver.max_steps.
+    t_end : float or "separation", optional
+        Overrides solver.t_end: a time in s runs through every later impact.
+    t_eval : array_like, optional
+        Sorted times in s at which to return the solution (read from the integrator's own
+        interpolating polynomial, as solve_ivp does). Times after the run's end (the first
+        separation) are left out. Without it, the samples are every integrator step.
+    dense_output : bool, default False
+        Keep the interpolating polynomials, so that ``result.sol(t)`` gives y at any time
+        of the run, across phase switches.
+
+    Returns
+    -------
+    SimulationResult
+        ``t`` (n_points,), ``y`` (n_states, n_points), the outputs, ``impacts``,
+        ``summary``, ``status`` and ``success``. A solver failure does not raise: the
+        result has ``success`` False, the reason in ``message`` and the samples reached.
+
+    Raises
+    ------
+    SceneError
+        An unknown option, or a value an engine cannot take, before any model is built.
+    BuildError
+        The C model could not be generated or compiled.
+
+    Examples
+    --------
+    >>> import impactgen
+    >>> scene = impactgen.load_scene("paper")
+    >>> result = impactgen.simulate(scene, rtol=1e-8, t_eval=[0.0, 1e-4, 2e-4])
+    >>> result.y.shape
+    (5, 3)
+    >>> round(result.summary["delta_r"] * 1e6, 2)       # permanent deformation in um
+    5.57
+    """
+    if unknown:
+        name = sorted(unknown)[0]
+        raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
+    if engine not in ENGINES:
+        raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
+    given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
+    overrides = {SOLVER_OPTIONS[k]: v for k, v in given.items() if v is not None}
+    if method is not None and engine == "c":
+        overrides["solver.method"] = _c_method(method)
+    if overrides:
+        scene = scene.replace(overrides)
+    times = _checked_times(t_eval, scene) if t_eval is not None else None
+    if not isinstance(dense_output, (bool, np.bool_)):
+        raise SceneError("dense_output", f"expected True or False, got {dense_output!r}")
     if engine == "c":
         from . import phases
         from .build import compile_model
-        return phases.run(compile_model(model_spec(scene)), scene, **options)
-    if engine == "reference":
-        from . import reference
-        return reference.simulate(scene, **options)
-    raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
+        return phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output))
+    from . import reference
+    return reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))
+
+
+def _c_method(method: Any) -> str:
+    name = method.lower() if isinstance(method, str) else method
+    if name not in C_METHODS:
+        raise SceneError("method", f"{method!r} is not a method of the C engine ({', '.join(C_METHODS)}); "
+                                   "solve_ivp's methods (Radau, LSODA, ...) need engine='reference'")
+    return name
+
+
+def _reference_method(method: Any) -> str:
+    from .reference import METHODS
+    if method is None:
+        return "Radau"
+    names = {m.lower(): m for m in METHODS}
+    if not isinstance(method, str) or method.lower() not in names:
+        raise SceneError("method", f"{method!r} is not a method of the reference engine "
+                                   f"({', '.join(METHODS)})")
+    return names[method.lower()]
+
+
+def _checked_times(t_eval: Any, scene: Scene) -> np.ndarray:
+    """t_eval as a sorted 1-D array of finite times within the run."""
+    try:
+        times = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError):
+        raise SceneError("t_eval", f"expected an array of times in s, got {t_eval!r}") from None
+    if times.ndim != 1 or not len(times):
+        raise SceneError("t_eval", f"expected a non-empty 1-D array of times, got shape {times.shape}")
+    if not np.all(np.isfinite(times)):
+        raise SceneError("t_eval", "times must be finite")
+    if np.any(np.diff(times) < 0):
+        raise SceneError("t_eval", "times must be sorted in increasing order")
+    end = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
+    if times[0] < 0 or times[-1] > end * (1 + 4 * np.finfo(float).eps):
+        what = "solver.t_end" if scene.solver.t_end is not None else "solver.t_max"
+        raise SceneError("t_eval", f"times must lie in [0, {what} = {end:g} s], got "
+                                   f"[{times[0]:g}, {times[-1]:g}]")
+    return times
+
+
+__all__ = ["ENGINES", "OPTIONS", "model_spec", "simulate"]

@@ -32,6 +32,7 @@ from .build import CompiledModel
 from .codegen.expressions import PHASES
 from .contact_constants import (RESIDUAL_LAWS, YIELD_ONSET, ContactConstants, contact_constants,
                                 unloading_radius)
+from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
@@ -104,6 +105,8 @@ class CvodeSession:
             raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
         self.solver = ffi.gc(solver, lib.ig_solver_free)
         self.capacity = FIRST_BUFFER
+        self.dense_terms = int(lib.ig_dense_terms(self.solver))
+        self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
         self._alloc()
         # per-segment arguments, allocated once
         nev = max(len(model.event_names), 1)
@@ -121,10 +124,20 @@ class CvodeSession:
         self.y_samples = np.empty((self.capacity, self.model.nstate))
         self.t_buf = ffi.from_buffer("double[]", self.t_samples)
         self.y_buf = ffi.from_buffer("double[]", self.y_samples)
+        self.d_samples = np.empty((self.capacity, self.dense_terms, self.model.nstate)) if self.dense else None
+        self.d_buf = ffi.from_buffer("double[]", self.d_samples) if self.dense else ffi.NULL
+
+    def keep_polynomials(self, dense: bool) -> None:
+        """Ask for (or stop asking for) each step's Taylor coefficients from the next segment on."""
+        if dense != self.dense:
+            self.dense = dense
+            self._alloc()
 
     def segment(self, params, phase: str, t0: float, y0: np.ndarray, t_stop: float,
-                events: tuple[tuple[str, int], ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
-        """Integrate from (t0, y0) until an event or t_stop; return samples and fired events."""
+                events: tuple[tuple[str, int], ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, list[str]]:
+        """Integrate from (t0, y0) until an event or t_stop; return the samples, their step
+        polynomials (None unless `keep_polynomials`) and the events that fired. A failure
+        raises SolverError carrying the samples reached as `partial`."""
         lib = self.model.lib
         for k, (name, direction) in enumerate(events):
             self.event_idx[k] = self.event_index[name]
@@ -134,25 +147,30 @@ class CvodeSession:
                                     self.event_dirs, len(events))
         if flag < 0:
             raise SolverError(self._message(), phase, t0)
-        ts, ys = [], []
+        ts, ys, ds = [], [], []
         n_out, roots = self.n_out, self.roots
         while True:
-            flag = lib.ig_segment_advance(self.solver, self.t_buf, self.y_buf, self.capacity, n_out, roots)
+            flag = lib.ig_segment_advance(self.solver, self.t_buf, self.y_buf, self.d_buf, self.capacity,
+                                          n_out, roots)
             k = n_out[0]
             ts.append(self.t_samples[:k].copy())
             ys.append(self.y_samples[:k].copy())
+            if self.dense:
+                ds.append(self.d_samples[:k].copy())
             if flag == lib.IG_BUFFER_FULL:
                 self.capacity *= 2
                 self._alloc()
                 continue
             if flag < 0:
                 t_fail = float(ts[-1][-1]) if k else (float(ts[-2][-1]) if len(ts) > 1 else t0)
-                raise SolverError(self._message(), phase, t_fail)
+                error = SolverError(self._message(), phase, t_fail)
+                error.partial = (np.concatenate(ts), np.concatenate(ys), np.concatenate(ds) if ds else None)
+                raise error
             break
         fired = [events[i][0] for i in range(len(events)) if flag == lib.IG_ROOT and roots[i] != 0]
         if len(ts) == 1:
-            return ts[0], ys[0], fired
-        return np.concatenate(ts), np.concatenate(ys), fired
+            return ts[0], ys[0], (ds[0] if ds else None), fired
+        return np.concatenate(ts), np.concatenate(ys), (np.concatenate(ds) if ds else None), fired
 
     def use_jacobian(self, analytic: bool) -> None:
         if self.model.lib.ig_solver_use_jacobian(self.solver, 1 if analytic else 0) != 0:
@@ -258,8 +276,13 @@ def set_params(model: CompiledModel, params, **values: float) -> None:
             setattr(params, name, value)
 
 
-def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao") -> SimulationResult:
-    """Simulate `scene` with the compiled `model` from phase to phase."""
+def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None, dense_output: bool = False,
+        residual_law: str = "marghitu-zhao") -> SimulationResult:
+    """Simulate `scene` with the compiled `model` from phase to phase.
+
+    `t_eval` (sorted times) adds samples read from CVODE's interpolating polynomials;
+    `dense_output` keeps those polynomials as `result.sol`. A solver failure ends the run
+    with status "failed" and the samples reached so far."""
     started = time.perf_counter()
     consts = contact_constants(scene)
     plastic, coulomb = model.spec.plastic, model.spec.coulomb
@@ -268,6 +291,8 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
     params = fill_params(model, scene, consts)
     free_atol = default_atol(scene, model.nstate)
     session = CvodeSession.open(model, scene, free_atol)
+    polynomials = dense_output or t_eval is not None
+    session.keep_polynomials(polynomials)
     out_index = {name: i for i, name in enumerate(model.output_names)}
     analytic = bool(model.spec.jacobian)
 
@@ -280,6 +305,9 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         for k, v in saved.items():
             setattr(params, k, v)
         return float(value)
+
+    def outputs_at(t_now: np.ndarray, y_rows: np.ndarray) -> dict[str, np.ndarray]:
+        return dict(zip(model.output_names, session.outputs(params, t_now, y_rows).T))
 
     def impact_begins(y_now: np.ndarray, out_now: list[float]) -> None:
         named = {k: out_now[out_index[k]] for k in ("v_Bx", "v_By", "delta_rate", "T")}
@@ -309,6 +337,9 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         return _no_impact_at_start(scene, model, y, first, rate0, started)
 
     ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first_row], [(phase, 1)]
+    dense_breaks: list[float] = [t]
+    dense_pieces: list[StepPolynomials] = []
+    sampler = TimeSampler(t_eval) if t_eval is not None else None
     spans: list[PhaseSpan] = []
     impacts: list[Impact] = []
     n_samples = 1
@@ -317,71 +348,93 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         impact_begins(y, first)
     status, message = "ok", ""
 
-    while True:
-        if len(spans) >= MAX_SEGMENTS:
-            raise SolverError(f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); "
-                              "shorten solver.t_end", phase, t)
-        rule = rules[phase]
-        params.phase = LAW_CODE[rule.law]
-        events = rule.events
-        if coulomb and phase != "free":
-            events = events + SLIP_ENDS[params.slip]
-        if analytic:  # the analytic Jacobian does not know the constraint forces
-            session.use_jacobian(phase != "sustained" and not (coulomb and phase != "free" and params.slip == 0))
-        seg_t, seg_y, fired = session.segment(params, phase, t, y, t_end, events)
+    def record(phase_now: str, seg_t: np.ndarray, seg_y: np.ndarray, seg_d: np.ndarray | None) -> np.ndarray:
+        """Keep a segment's samples (and polynomials, and t_eval samples); return its outputs."""
+        nonlocal n_samples
         seg_out = session.outputs(params, seg_t, seg_y)
-        friction_state = SLIP_LABEL[params.slip] if coulomb and phase != "free" else ""
-        if friction_state == "stick":
-            _check_stick(seg_out, out_index, scene.contact.friction, phase, float(seg_t[-1]))
         ts.append(seg_t), ys.append(seg_y), outs.append(seg_out)
-        labels.append((phase, len(seg_t)))
+        labels.append((phase_now, len(seg_t)))
         n_samples += len(seg_t)
-        t, y, last = float(seg_t[-1]), seg_y[-1].copy(), seg_out[-1].tolist()
-        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
-                               friction_state))
-        if not fired:
-            status, message = _end_without_event(scene, impacts, phase)
-            break
-        impact = impacts[-1] if impacts else None
-        fired_all = fired
-        contact_fired = [e for e in fired if e not in SLIP_EVENTS]
-        if coulomb and len(contact_fired) < len(fired) and phase != "free":
-            old = params.slip
-            hold = output(y, t, "F_f", slip=0.0)
-            params.slip = slip_after(fired, old, last[out_index["F"]], hold, scene.contact.friction)
-            impact.stick_slip.append((t, SLIP_LABEL[old], SLIP_LABEL[params.slip]))
-        if not contact_fired:
-            continue  # only the friction state changed
-        fired = contact_fired
-        new_phase = _next_phase(phase, fired, plastic, params, consts)
-        if new_phase == "elastic" and phase == "free":  # a new impact
-            set_params(model, params, delta_m=0.0, delta_r=0.0, R_res=consts.R)
-            impacts.append(Impact(t_start=t, i_start=n_samples - 1))
-            impact = impacts[-1]
-            impact_begins(y, last)
-        elif new_phase == "restitution" and phase in ("elastic", "elastoplastic"):
-            delta_m, P_m = last[out_index["delta"]], last[out_index["F"]]
-            delta_r = residual(delta_m, consts.delta_c) if plastic else 0.0
-            R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star) if plastic else consts.R
-            set_params(model, params, delta_m=delta_m, delta_r=delta_r, R_res=R_res)
-            impact.delta_m, impact.P_m, impact.delta_r, impact.R_res = delta_m, P_m, delta_r, R_res
-            if model.spec.sustained and len(impacts) > 1 and chattering(impacts[-2], impacts[-1]) and \
-                    output(y, t, "F", phase=LAW_CODE["sustained"]) > 0.0:
-                new_phase = "sustained"  # hold the tip: no rebound into ever shorter flights
-        if impact is not None and phase != "free":
-            impact.switches.append((t, phase, new_phase))
-        if coulomb and "free" not in (phase, new_phase) and params.slip != 0.0 and len(contact_fired) == len(fired_all):
-            here = {k: last[out_index[k]] for k in ("v_Bx", "v_By", "F")}
-            _slip_direction_check(params, here, lambda: output(y, t, "F_f", slip=0.0),
-                                  scene.contact.friction, t, impact)
-        if new_phase == "free":
-            impact.t_end, impact.i_end = t, n_samples - 1
-            if scene.solver.t_end is None:
+        if seg_d is not None and len(seg_t):
+            piece = StepPolynomials(seg_t, seg_d)
+            dense_pieces.append(piece)
+            dense_breaks.append(float(seg_t[-1]))
+            if sampler is not None:
+                sampler.segment(float(seg_t[-1]), piece, outputs_at, phase_now)
+        return seg_out
+
+    try:
+        while True:
+            if len(spans) >= MAX_SEGMENTS:
+                raise SolverError(f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); "
+                                  "shorten solver.t_end", phase, t)
+            rule = rules[phase]
+            params.phase = LAW_CODE[rule.law]
+            events = rule.events
+            if coulomb and phase != "free":
+                events = events + SLIP_ENDS[params.slip]
+            if analytic:  # the analytic Jacobian does not know the constraint forces
+                session.use_jacobian(phase != "sustained" and not (coulomb and phase != "free" and params.slip == 0))
+            try:
+                seg_t, seg_y, seg_d, fired = session.segment(params, phase, t, y, t_end, events)
+            except SolverError as error:
+                partial = getattr(error, "partial", None)
+                if partial is not None and len(partial[0]):
+                    record(phase, *partial)
+                raise
+            seg_out = record(phase, seg_t, seg_y, seg_d)
+            friction_state = SLIP_LABEL[params.slip] if coulomb and phase != "free" else ""
+            if friction_state == "stick":
+                _check_stick(seg_out, out_index, scene.contact.friction, phase, float(seg_t[-1]))
+            t, y, last = float(seg_t[-1]), seg_y[-1].copy(), seg_out[-1].tolist()
+            spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
+                                   friction_state))
+            if not fired:
+                status, message = _end_without_event(scene, impacts, phase)
                 break
-            if phase == "sustained":  # the surface is where the tip left it
-                set_params(model, params, y_s=params.y_s - last[out_index["delta"]])
-            session.set_atol(free_atol)
-        phase = new_phase
+            impact = impacts[-1] if impacts else None
+            fired_all = fired
+            contact_fired = [e for e in fired if e not in SLIP_EVENTS]
+            if coulomb and len(contact_fired) < len(fired) and phase != "free":
+                old = params.slip
+                hold = output(y, t, "F_f", slip=0.0)
+                params.slip = slip_after(fired, old, last[out_index["F"]], hold, scene.contact.friction)
+                impact.stick_slip.append((t, SLIP_LABEL[old], SLIP_LABEL[params.slip]))
+            if not contact_fired:
+                continue  # only the friction state changed
+            fired = contact_fired
+            new_phase = _next_phase(phase, fired, plastic, params, consts)
+            if new_phase == "elastic" and phase == "free":  # a new impact
+                set_params(model, params, delta_m=0.0, delta_r=0.0, R_res=consts.R)
+                impacts.append(Impact(t_start=t, i_start=n_samples - 1))
+                impact = impacts[-1]
+                impact_begins(y, last)
+            elif new_phase == "restitution" and phase in ("elastic", "elastoplastic"):
+                delta_m, P_m = last[out_index["delta"]], last[out_index["F"]]
+                delta_r = residual(delta_m, consts.delta_c) if plastic else 0.0
+                R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star) if plastic else consts.R
+                set_params(model, params, delta_m=delta_m, delta_r=delta_r, R_res=R_res)
+                impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = delta_m, P_m, delta_r, R_res
+                if model.spec.sustained and len(impacts) > 1 and chattering(impacts[-2], impacts[-1]) and \
+                        output(y, t, "F", phase=LAW_CODE["sustained"]) > 0.0:
+                    new_phase = "sustained"  # hold the tip: no rebound into ever shorter flights
+            if impact is not None and phase != "free":
+                impact.switches.append((t, phase, new_phase))
+            if coulomb and "free" not in (phase, new_phase) and params.slip != 0.0 and \
+                    len(contact_fired) == len(fired_all):
+                here = {k: last[out_index[k]] for k in ("v_Bx", "v_By", "F")}
+                _slip_direction_check(params, here, lambda: output(y, t, "F_f", slip=0.0),
+                                      scene.contact.friction, t, impact)
+            if new_phase == "free":
+                impact.t_end, impact.i_end = t, n_samples - 1
+                if scene.solver.t_end is None:
+                    break
+                if phase == "sustained":  # the surface is where the tip left it
+                    set_params(model, params, y_s=params.y_s - last[out_index["delta"]])
+                session.set_atol(free_atol)
+            phase = new_phase
+    except SolverError as error:
+        status, message = "failed", str(error)
 
     trajectory = Trajectory(
         t=np.concatenate(ts), y=np.concatenate(ys),
@@ -389,9 +442,12 @@ def run(model: CompiledModel, scene: Scene, residual_law: str = "marghitu-zhao")
         outputs={name: col for name, col in zip(model.output_names, np.concatenate(outs).T)},
     )
     stats = session.stats()
-    session.close(scene)
+    if status != "failed":  # a failed integrator is not handed to the next run
+        session.close(scene)
     stats.update(segments=len(spans), samples=n_samples, wall_s=time.perf_counter() - started)
-    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats)
+    sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
+    sol = DenseSolution(dense_breaks, dense_pieces, model.nstate) if dense_output else None
+    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol)
 
 
 def _slip_direction_check(params, here: dict[str, float], holding_force: Callable[[], float],

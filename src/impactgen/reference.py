@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .dense import DenseSolution, TimeSampler
 from .errors import SceneError, SolverError
 from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
@@ -333,22 +334,26 @@ class Segment:
     nsteps: int
     nfev: int
     njev: int
+    sol: object = None  # solve_ivp's OdeSolution of the segment, when dense output was asked for
 
 
 def solve_ivp_segment(model: "ReferenceModel", phase: str, t0: float, y0: np.ndarray, t_final: float,
-                      events: dict[str, object], method: str, rtol: float, atol: np.ndarray) -> Segment:
+                      events: dict[str, object], method: str, rtol: float, atol: np.ndarray,
+                      dense: bool = False) -> Segment:
     """Integrate one phase with scipy.integrate.solve_ivp and its terminal events."""
     names = list(events)
     sol = solve_ivp(lambda t_, y_: model.rhs(t_, y_, phase), (t0, t_final), y0, method=method,
-                    rtol=rtol, atol=atol, events=list(events.values()))
+                    rtol=rtol, atol=atol, events=list(events.values()), dense_output=dense)
     if sol.status < 0:
-        raise SolverError(f"solve_ivp ({method}): {sol.message}", phase, float(sol.t[-1]))
+        error = SolverError(f"solve_ivp ({method}): {sol.message}", phase, float(sol.t[-1]))
+        error.partial = (sol.t[1:], sol.y.T[1:])
+        raise error
     fired = [names[i] for i, te in enumerate(sol.t_events) if len(te)]
     seg_t, seg_y = sol.t[1:], sol.y.T[1:]
     if fired:  # the last sample is the event point
         seg_t = np.append(seg_t[:-1], sol.t_events[names.index(fired[0])][0])
         seg_y = np.vstack([seg_y[:-1], sol.y_events[names.index(fired[0])][0]])
-    return Segment(seg_t, seg_y, fired, len(sol.t) - 1, sol.nfev, sol.njev)
+    return Segment(seg_t, seg_y, fired, len(sol.t) - 1, sol.nfev, sol.njev, sol.sol)
 
 
 @dataclass
@@ -394,10 +399,12 @@ def _begin_slip(model: ReferenceModel, y: np.ndarray) -> None:
 
 def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
              atol: float | None = None, model: ReferenceModel | None = None,
-             integrate=solve_ivp_segment, engine: str = "reference") -> SimulationResult:
+             integrate=solve_ivp_segment, engine: str = "reference", t_eval: np.ndarray | None = None,
+             dense_output: bool = False) -> SimulationResult:
     """Run `scene` through the phases with solve_ivp; the result has the C engine's shape.
     `model` and `integrate` let a benchmark put another right-hand side or integrator
-    under the same phase loop."""
+    under the same phase loop. solver.max_steps is checked after each phase segment (solve_ivp
+    has no step limit of its own). A failure ends the run with status "failed"."""
     if method not in METHODS and integrate is solve_ivp_segment:
         raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
     if scene.solver.t_end is not None and scene.solver.sustained_contact:
@@ -412,6 +419,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
     atol_vec = np.full(nstate, atol_q)
     atol_vec[2 * n:] = atol_q * energy_scale
+    dense = dense_output or t_eval is not None
+    extra = {"dense": True} if dense else {}
 
     y = np.concatenate([scene.q0, scene.u0, np.zeros(nstate - 2 * n)])
     t = 0.0
@@ -438,62 +447,85 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     impacts: list[Impact] = [Impact(t_start=0.0, i_start=0)] if phase == "elastic" else []
     stats = {"nsteps": 0, "nfev": 0, "njev": 0}
     status, message = "ok", ""
-    while True:
-        if len(spans) >= MAX_SEGMENTS:
-            raise SolverError(f"more than {MAX_SEGMENTS} phase switches; shorten solver.t_end", phase, t)
-        seg = integrate(model, phase, t, y, t_final, _phase_events(model, phase), method, rtol, atol_vec)
-        stats["nsteps"] += seg.nsteps
-        stats["nfev"] += seg.nfev
-        stats["njev"] += seg.njev
-        fired, seg_t, seg_y = seg.fired, seg.t, seg.y
-        rec.add(model, seg_t, seg_y, phase)
-        t, y = float(seg_t[-1]), seg_y[-1].copy()
-        c = model.contact
-        friction = SLIP_NAMES[c.slip] if c.exact_coulomb and phase != "free" else ""
-        spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
-                               friction))
-        if not fired:
-            if not impacts and scene.solver.t_end is None:
-                status, message = "no-impact", f"no contact within solver.t_max = {scene.solver.t_max:g} s"
-            elif scene.solver.t_end is None:
-                message = f"no separation within solver.t_max = {scene.solver.t_max:g} s"
-            break
-        impact = impacts[-1] if impacts else None
-        slipping = [e for e in fired if e in FRICTION_EVENTS]
-        if slipping:  # possibly at the same instant as a contact event (a single bar: u = 0)
-            old = c.slip
-            if old == 0:
-                c.slip = -1.0 if slipping[0] == "slip_backward" else 1.0
+    breaks, pieces = [t], []
+    sampler = TimeSampler(t_eval) if t_eval is not None else None
+    try:
+        while True:
+            if len(spans) >= MAX_SEGMENTS:
+                raise SolverError(f"more than {MAX_SEGMENTS} phase switches; shorten solver.t_end", phase, t)
+            try:
+                seg = integrate(model, phase, t, y, t_final, _phase_events(model, phase), method, rtol,
+                                atol_vec, **extra)
+            except SolverError as error:
+                partial = getattr(error, "partial", None)
+                if partial is not None and len(partial[0]):
+                    rec.add(model, partial[0], partial[1], phase)
+                raise
+            stats["nsteps"] += seg.nsteps
+            stats["nfev"] += seg.nfev
+            stats["njev"] += seg.njev
+            fired, seg_t, seg_y = seg.fired, seg.t, seg.y
+            rec.add(model, seg_t, seg_y, phase)
+            if seg.nsteps > scene.solver.max_steps:
+                raise SolverError(f"{seg.nsteps} steps in one phase, more than solver.max_steps = "
+                                  f"{scene.solver.max_steps}", phase, float(seg_t[-1]))
+            if dense and seg.sol is not None and len(seg_t):
+                breaks.append(float(seg_t[-1]))
+                pieces.append(seg.sol)
+                if sampler is not None:
+                    sampler.segment(float(seg_t[-1]), seg.sol,
+                                    lambda tt, yy, ph=phase: model.outputs(tt, yy, ph), phase)
+            t, y = float(seg_t[-1]), seg_y[-1].copy()
+            c = model.contact
+            friction = SLIP_NAMES[c.slip] if c.exact_coulomb and phase != "free" else ""
+            spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t, fired[0] if fired else "t_end",
+                                   friction))
+            if not fired:
+                if not impacts and scene.solver.t_end is None:
+                    status, message = "no-impact", f"no contact within solver.t_max = {scene.solver.t_max:g} s"
+                elif scene.solver.t_end is None:
+                    message = f"no separation within solver.t_max = {scene.solver.t_max:g} s"
+                break
+            impact = impacts[-1] if impacts else None
+            slipping = [e for e in fired if e in FRICTION_EVENTS]
+            if slipping:  # possibly at the same instant as a contact event (a single bar: u = 0)
+                old = c.slip
+                if old == 0:
+                    c.slip = -1.0 if slipping[0] == "slip_backward" else 1.0
+                else:
+                    c.slip = _slip_at_stop(model, y, phase)
+                    c.slip = 0.0 if c.slip == old else c.slip  # pushed on only by rounding: stuck
+                impact.stick_slip.append((t, SLIP_NAMES[old], SLIP_NAMES[c.slip]))
+            fired = [e for e in fired if e not in FRICTION_EVENTS]
+            if not fired:
+                continue
+            new = _after(phase, fired[0], model.contact)
+            if new != "free" and phase != "free" and not slipping:
+                _slip_direction_check(model, y, new, t, impact)
+            if phase == "free":
+                model.contact.reset()
+                impacts.append(Impact(t_start=t, i_start=rec.count - 1))
+                _begin_slip(model, y)
             else:
-                c.slip = _slip_at_stop(model, y, phase)
-                c.slip = 0.0 if c.slip == old else c.slip  # pushed on only by rounding: stuck
-            impact.stick_slip.append((t, SLIP_NAMES[old], SLIP_NAMES[c.slip]))
-        fired = [e for e in fired if e not in FRICTION_EVENTS]
-        if not fired:
-            continue
-        new = _after(phase, fired[0], model.contact)
-        if new != "free" and phase != "free" and not slipping:
-            _slip_direction_check(model, y, new, t, impact)
-        if phase == "free":
-            model.contact.reset()
-            impacts.append(Impact(t_start=t, i_start=rec.count - 1))
-            _begin_slip(model, y)
-        else:
-            if new == "restitution" and phase in ("elastic", "elastoplastic"):
-                delta_m = model.delta_and_rate(y)[0]
-                model.contact.at_maximum_compression(delta_m, model.contact.normal_force(phase, delta_m))
-                impact.delta_m = delta_m
-                impact.P_m = model.contact.normal_force(phase, delta_m)
-                impact.delta_r, impact.R_res = model.contact.delta_r, model.contact.R_res
-            impact.switches.append((t, phase, new))
-            if new == "free":
-                impact.t_end, impact.i_end = t, rec.count - 1
-                if scene.solver.t_end is None:
-                    break
-        phase = new
+                if new == "restitution" and phase in ("elastic", "elastoplastic"):
+                    delta_m = model.delta_and_rate(y)[0]
+                    model.contact.at_maximum_compression(delta_m, model.contact.normal_force(phase, delta_m))
+                    impact.delta_max = delta_m
+                    impact.P_max = model.contact.normal_force(phase, delta_m)
+                    impact.delta_r, impact.R_res = model.contact.delta_r, model.contact.R_res
+                impact.switches.append((t, phase, new))
+                if new == "free":
+                    impact.t_end, impact.i_end = t, rec.count - 1
+                    if scene.solver.t_end is None:
+                        break
+            phase = new
+    except SolverError as error:
+        status, message = "failed", str(error)
 
     outputs = {k: np.concatenate([o[k] for o in rec.outputs]) for k in rec.outputs[0]}
     trajectory = Trajectory(np.concatenate(rec.t), np.concatenate(rec.y), np.concatenate(rec.phase), outputs)
     stats.update(segments=len(spans), samples=rec.count, wall_s=time.perf_counter() - started,
                  method=method)
-    return SimulationResult(scene, engine, status, message, trajectory, spans, impacts, stats)
+    sampled = Trajectory(*sampler.gathered(nstate, list(outputs))) if sampler else None
+    sol = DenseSolution(breaks, pieces, nstate) if dense_output else None
+    return SimulationResult(scene, engine, status, message, trajectory, spans, impacts, stats, sampled, sol)

@@ -1,19 +1,28 @@
 """Stage 8 of the pipeline: what a simulation returns, shaped like scipy's solve_ivp result.
 
-`SimulationResult` holds the sampled trajectories (t, q, u, delta, F, F_f, v_B, phase, T per
-link, T, V, and the works of the contact forces), the phase spans, the impacts with what
-was recorded at their switches, and the summary with the energy budget of MODEL section 6.
-Both engines fill the same types, so their results compare key by key.
+`SimulationResult` holds the sampled trajectories, the phase spans, one record per impact and
+two summaries: the run's (what a run to a time ends with) and its first impact's (MODEL
+section 6, with its energy budget). As in solve_ivp, `t` is (n_points,) and `y` is
+(n_states, n_points); a failure is a result with `success` False, not an exception. Both
+engines fill the same types, so their results compare key by key.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
+from .dense import DenseSolution
 from .scene import Scene
+
+# The scalar outputs every model computes at each sample (T1..Tn, the kinetic energy per
+# link, come beside them), with their units.
+OUTPUT_UNITS = {"x_B": "m", "y_B": "m", "v_Bx": "m/s", "v_By": "m/s", "delta": "m",
+                "delta_rate": "m/s", "F": "N", "F_f": "N", "T": "J", "V": "J"}
+STATUSES = ("ok", "no-impact", "failed")
 
 
 @dataclass
@@ -33,40 +42,114 @@ class PhaseSpan:
 
 @dataclass
 class Impact:
-    """One impact: from first contact to separation, with the values fixed at its switches."""
+    """One impact: from first contact to separation, with the values fixed at its switches
+    (by the engine) and its energies (filled from the samples when the result is made)."""
 
     t_start: float
     i_start: int  # sample index at first contact
     t_end: float | None = None  # separation; None if the run ended in contact
     i_end: int | None = None
-    delta_m: float = 0.0
-    P_m: float = 0.0
-    delta_r: float = 0.0
-    R_res: float = 0.0
+    delta_max: float = 0.0  # m, at maximum compression
+    P_max: float = 0.0  # N, the normal force there
+    delta_r: float = 0.0  # m, permanent deformation (Eq. 12)
+    R_res: float = 0.0  # m, radius of the unloading curve
     switches: list[tuple[float, str, str]] = field(default_factory=list)  # (t, from, to)
     stick_slip: list[tuple[float, str, str]] = field(default_factory=list)  # exact Coulomb: (t, from, to)
+    T_before: float = math.nan  # J, kinetic energy at first contact
+    T_after: float = math.nan  # J, at separation (or the end of the run)
+    W_normal: float = 0.0  # J, work of the normal force over the impact
+    W_friction: float = 0.0  # J
+    W_gravity: float = 0.0  # J
+
+    @property
+    def duration(self) -> float | None:
+        return None if self.t_end is None else self.t_end - self.t_start
+
+    def to_dict(self) -> dict[str, Any]:
+        """One row of the impacts table (JSON and DataFrame)."""
+        return {
+            "t_start": self.t_start, "t_end": self.t_end, "duration": self.duration,
+            "delta_max": self.delta_max, "delta_r": self.delta_r, "P_max": self.P_max,
+            "R_res": self.R_res, "T_before": self.T_before, "T_after": self.T_after,
+            "W_normal": self.W_normal, "W_friction": self.W_friction, "W_gravity": self.W_gravity,
+            "switches": [{"t": t, "from": a, "to": b} for t, a, b in self.switches],
+            "stick_slip": [{"t": t, "from": a, "to": b} for t, a, b in self.stick_slip],
+        }
+
+
+IMPACT_UNITS = {"t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
+                "P_max": "N", "R_res": "m", "T_before": "J", "T_after": "J", "W_normal": "J",
+                "W_friction": "J", "W_gravity": "J"}
 
 
 @dataclass
 class Trajectory:
-    """Samples at every accepted integrator step and at every switch."""
+    """Samples at every accepted integrator step and at every switch (or at t_eval)."""
 
     t: np.ndarray  # (N,)
-    y: np.ndarray  # (N, nstate): q, u, then the works W_normal[, W_friction]
+    y: np.ndarray  # (N, nstate): q, u, then the works W_normal[, W_friction]; rows are samples
     phase: np.ndarray  # (N,) phase name of the step that ended at each sample
     outputs: dict[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
 
 
 @dataclass
 class SimulationResult:
+    """The outcome of `impactgen.simulate`, shaped like scipy's solve_ivp result.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n_points,)
+        Sample times in s: every integrator step and switch, or `t_eval` if it was given.
+    y : ndarray, shape (n_states, n_points)
+        The states at `t`: q1..qn (rad), u1..un (rad/s), W_normal (J)[, W_friction (J)].
+    q, u : ndarray, shape (n, n_points)
+        Link angles and angular speeds.
+    delta, delta_rate, F, F_f, x_B, y_B, v_Bx, v_By, T, V : ndarray, shape (n_points,)
+        Penetration, its rate, normal and friction force, tip position and velocity,
+        kinetic and potential energy (`OUTPUT_UNITS`). `outputs` has them all by name.
+    v_B : ndarray, shape (2, n_points)
+    T_links : ndarray, shape (n, n_points)
+    phase : ndarray of str, shape (n_points,)
+    sol : DenseSolution or None
+        y(t) anywhere in the run, if `dense_output=True` was asked for.
+    status : {"ok", "no-impact", "failed"}
+    success : bool
+        False only for "failed"; `message` then says why, and the samples reach the failure.
+    message : str
+    phases : list of PhaseSpan
+    impacts : list of Impact
+        One record per impact; `impacts_frame()` gives them as a pandas DataFrame.
+    summary : dict
+        The run: its end state, energy budget over the whole run, impact count, the time
+        sustained contact began. For a run to separation it is the first impact's.
+    first_impact : dict
+        The first impact alone (MODEL section 6), with its energy budget.
+    warnings : list of str
+        Where the result leaves the model's range of validity.
+    stats : dict
+        Integrator counters and the wall time.
+    """
+
     scene: Scene
     engine: str
-    status: str  # "ok" | "no-impact"
+    status: str
     message: str
-    trajectory: Trajectory
+    trajectory: Trajectory  # every step: what the summaries are computed from
     phases: list[PhaseSpan]
     impacts: list[Impact]
     stats: dict[str, Any]
+    sampled: Trajectory | None = None  # the samples at t_eval, if asked for
+    sol: DenseSolution | None = None
+    summary: dict[str, Any] = field(init=False)
+    first_impact: dict[str, Any] = field(init=False)
+
+    def __post_init__(self) -> None:
+        _fill_impact_energies(self.trajectory, self.n, self.impacts)
+        self.first_impact = _first_impact_summary(self)
+        self.summary = self.first_impact if self._to_separation() else _run_summary(self)
+
+    def _to_separation(self) -> bool:
+        return self.scene.solver.t_end is None and self.status != "failed"
 
     # -- solve_ivp-like views -------------------------------------------------------------
     @property
@@ -75,113 +158,222 @@ class SimulationResult:
 
     @property
     def success(self) -> bool:
-        return self.status in ("ok", "no-impact")
+        return self.status != "failed"
+
+    @property
+    def _shown(self) -> Trajectory:
+        return self.sampled if self.sampled is not None else self.trajectory
 
     @property
     def t(self) -> np.ndarray:
-        return self.trajectory.t
+        return self._shown.t
 
     @property
     def y(self) -> np.ndarray:
-        return self.trajectory.y
+        return self._shown.y.T
 
     @property
     def q(self) -> np.ndarray:
-        return self.trajectory.y[:, : self.n]
+        return self.y[: self.n]
 
     @property
     def u(self) -> np.ndarray:
-        return self.trajectory.y[:, self.n: 2 * self.n]
+        return self.y[self.n: 2 * self.n]
+
+    @property
+    def state_names(self) -> list[str]:
+        n, extra = self.n, self._shown.y.shape[1] - 2 * self.n
+        return ([f"q{i + 1}" for i in range(n)] + [f"u{i + 1}" for i in range(n)]
+                + ["W_normal", "W_friction"][:extra])
 
     @property
     def phase(self) -> np.ndarray:
-        return self.trajectory.phase
+        return self._shown.phase
 
     @property
+    def outputs(self) -> dict[str, np.ndarray]:
+        out = dict(self._shown.outputs)
+        out.setdefault("F_f", np.zeros_like(self.t))
+        return out
+
+    @property
+    def x_B(self) -> np.ndarray:
+        return self._shown.outputs["x_B"]
+
+    @property
+    def y_B(self) -> np.ndarray:
+        return self._shown.outputs["y_B"]
+
+    @property
+    def v_Bx(self) -> np.ndarray:
+        return self._shown.outputs["v_Bx"]
+
+    @property
+    def v_By(self) -> np.ndarray:
+        return self._shown.outputs["v_By"]
+
+    @property
+    def delta(self) -> np.ndarray:
+        return self._shown.outputs["delta"]
+
+    @property
+    def delta_rate(self) -> np.ndarray:
+        return self._shown.outputs["delta_rate"]
+
+    @property
+    def F(self) -> np.ndarray:
+        return self._shown.outputs["F"]
+
+    @property
+    def F_f(self) -> np.ndarray:
+        return self._shown.outputs.get("F_f", np.zeros_like(self.t))
+
+    @property
+    def T(self) -> np.ndarray:
+        return self._shown.outputs["T"]
+
+    @property
+    def V(self) -> np.ndarray:
+        return self._shown.outputs["V"]
+
+    @property
+    def v_B(self) -> np.ndarray:
+        return np.vstack([self.v_Bx, self.v_By])
+
+    @property
+    def T_links(self) -> np.ndarray:
+        return np.vstack([self._shown.outputs[f"T{i + 1}"] for i in range(self.n)])
+
+    @property
+    def W_normal(self) -> np.ndarray:
+        return self.y[2 * self.n]
+
+    @property
+    def W_friction(self) -> np.ndarray:
+        y = self.y
+        return y[2 * self.n + 1] if y.shape[0] > 2 * self.n + 1 else np.zeros(y.shape[1])
+
+    @cached_property
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity (see validity.py)."""
         from .validity import validity_warnings
         return validity_warnings(self.scene, self.impacts)
 
-    def __getattr__(self, name: str) -> np.ndarray:
-        outputs = self.__dict__.get("trajectory")
-        if outputs is not None and name in outputs.outputs:
-            return outputs.outputs[name]
-        raise AttributeError(name)
+    def impacts_frame(self):
+        """The impacts as a pandas DataFrame, one row per impact (units in `IMPACT_UNITS`).
 
-    @property
-    def F_f(self) -> np.ndarray:
-        return self.trajectory.outputs.get("F_f", np.zeros_like(self.t))
-
-    @property
-    def v_B(self) -> np.ndarray:
-        o = self.trajectory.outputs
-        return np.column_stack([o["v_Bx"], o["v_By"]])
-
-    @property
-    def T_links(self) -> np.ndarray:
-        o = self.trajectory.outputs
-        return np.column_stack([o[f"T{i + 1}"] for i in range(self.n)])
-
-    @property
-    def W_normal(self) -> np.ndarray:
-        return self.trajectory.y[:, 2 * self.n]
-
-    @property
-    def W_friction(self) -> np.ndarray:
-        y = self.trajectory.y
-        return y[:, 2 * self.n + 1] if y.shape[1] > 2 * self.n + 1 else np.zeros(len(y))
-
-    # -- summary --------------------------------------------------------------------------
-    @property
-    def summary(self) -> dict[str, Any]:
-        """The first impact, as MODEL section 6 lists it, with its energy budget."""
-        if not self.impacts:
-            i0, i1 = 0, len(self.t) - 1
-            impact = None
-        else:
-            impact = self.impacts[0]
-            i0 = impact.i_start
-            i1 = impact.i_end if impact.i_end is not None else len(self.t) - 1
-        T, V = self.trajectory.outputs["T"], self.trajectory.outputs["V"]
-        T0, Tf = float(T[i0]), float(T[i1])
-        W_n = float(self.W_normal[i1] - self.W_normal[i0])
-        W_f = float(self.W_friction[i1] - self.W_friction[i0])
-        W_g = float(V[i0] - V[i1])
-        return {
-            "T0": T0,
-            "Tf": Tf,
-            "delta_T": T0 - Tf,
-            "delta_max": impact.delta_m if impact else 0.0,
-            "delta_r": impact.delta_r if impact else 0.0,
-            "P_max": impact.P_m if impact else 0.0,
-            "R_res": impact.R_res if impact else 0.0,
-            "t_contact": (self.t[i1] - self.t[i0]) if impact and impact.t_end is not None else 0.0,
-            "t_impact": impact.t_start if impact else None,
-            "switches": [{"t": t, "from": a, "to": b} for t, a, b in impact.switches] if impact else [],
-            "stick_slip": [{"t": t, "from": a, "to": b} for t, a, b in impact.stick_slip] if impact else [],
-            "u_final": [float(v) for v in self.u[i1]],
-            "q_final": [float(v) for v in self.q[i1]],
-            "impacts": len(self.impacts),
-            "energy": {
-                "W_normal": W_n,
-                "W_friction": W_f,
-                "W_gravity": W_g,
-                "residual": (Tf - T0) - (W_n + W_f + W_g),
-            },
-        }
+        Returns
+        -------
+        pandas.DataFrame
+            Columns t_start, t_end, duration, delta_max, delta_r, P_max, R_res, T_before,
+            T_after, W_normal, W_friction, W_gravity, switches (the phase switches as
+            "from>to@t" joined by ";") and stick_slip.
+        """
+        from .errors import ImpactgenError
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImpactgenError("impacts_frame needs pandas: pip install 'impactgen[sweep]'") from None
+        rows = []
+        for record in self.impacts:
+            row = record.to_dict()
+            for key in ("switches", "stick_slip"):
+                row[key] = ";".join(f"{s['from']}>{s['to']}@{s['t']:.17g}" for s in row[key])
+            rows.append(row)
+        return pd.DataFrame(rows, columns=list(IMPACT_UNITS) + ["switches", "stick_slip"])
 
     def to_json_dict(self) -> dict[str, Any]:
-        return {
+        return _finite({
             "scene": self.scene.name,
             "engine": self.engine,
             "status": self.status,
             "message": self.message,
             "warnings": self.warnings,
-            "summary": _finite(self.summary),
+            "summary": self.summary,
+            "first_impact": self.first_impact,
+            "impacts": [i.to_dict() for i in self.impacts],
             "phases": [p.to_dict() for p in self.phases],
             "stats": self.stats,
-        }
+        })
+
+
+def _fill_impact_energies(traj: Trajectory, n: int, impacts: list[Impact]) -> None:
+    """Kinetic energy before and after each impact, and the works over it, from the samples."""
+    T = traj.outputs["T"]
+    last = len(traj.t) - 1
+    for impact in impacts:
+        i0 = impact.i_start
+        i1 = impact.i_end if impact.i_end is not None else last
+        impact.T_before, impact.T_after = float(T[i0]), float(T[i1])
+        works = _budget(traj, n, i0, i1)
+        impact.W_normal, impact.W_friction, impact.W_gravity = (
+            works["W_normal"], works["W_friction"], works["W_gravity"])
+
+
+def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> dict[str, float]:
+    """Energy budget between samples i0 and i1: the works against the change of T."""
+    T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
+    W_n = float(y[i1, 2 * n] - y[i0, 2 * n])
+    W_f = float(y[i1, 2 * n + 1] - y[i0, 2 * n + 1]) if y.shape[1] > 2 * n + 1 else 0.0
+    W_g = float(V[i0] - V[i1])
+    return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g,
+            "residual": (float(T[i1]) - float(T[i0])) - (W_n + W_f + W_g)}
+
+
+def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
+    return [{"t": t, "from": a, "to": b} for t, a, b in items]
+
+
+def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
+    """The first impact as MODEL section 6 lists it, with its energy budget (the whole run
+    when there was no impact). An impact the run ended in has t_contact 0."""
+    impact = result.impacts[0] if result.impacts else None
+    i0 = impact.i_start if impact else 0
+    i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
+    return _summary(result, i0, i1, [impact] if impact else [], count_open=False)
+
+
+def _run_summary(result: SimulationResult) -> dict[str, Any]:
+    """The whole run, from t = 0 to its last sample: the state it ends in and the energy
+    budget over every impact and flight. Every impact starts from the undeformed surface in
+    this model, so the deepest dent is the largest delta_r (not a sum); t_contact is the
+    total time in contact, an impact the run ends in counted to the end."""
+    return _summary(result, 0, len(result.trajectory.t) - 1, result.impacts, count_open=True)
+
+
+def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
+             count_open: bool) -> dict[str, Any]:
+    """Samples i0 to i1 and the impacts in them; the switches are the first impact's."""
+    traj, n = result.trajectory, result.n
+    T = traj.outputs["T"]
+    t_last = float(traj.t[i1])
+    deepest = max(impacts, key=lambda i: i.delta_r) if impacts else None
+    first = impacts[0] if impacts else None
+    contact = sum((i.t_end if i.t_end is not None else t_last) - i.t_start
+                  for i in impacts if i.t_end is not None or count_open)
+    return {
+        "T0": float(T[i0]),
+        "Tf": float(T[i1]),
+        "delta_T": float(T[i0]) - float(T[i1]),
+        "delta_max": max((i.delta_max for i in impacts), default=0.0),
+        "delta_r": deepest.delta_r if deepest else 0.0,
+        "P_max": max((i.P_max for i in impacts), default=0.0),
+        "R_res": deepest.R_res if deepest else 0.0,
+        "t_contact": float(contact),
+        "t_impact": first.t_start if first else None,
+        "switches": _switch_list(first.switches) if first else [],
+        "stick_slip": _switch_list(first.stick_slip) if first else [],
+        "u_final": [float(v) for v in traj.y[i1, n: 2 * n]],
+        "q_final": [float(v) for v in traj.y[i1, :n]],
+        "impacts": len(result.impacts),
+        "t_sustained": _sustained_start(result.phases),
+        "t_final": t_last,
+        "energy": _budget(traj, n, i0, i1),
+    }
+
+
+def _sustained_start(phases: list[PhaseSpan]) -> float | None:
+    return next((p.t0 for p in phases if p.phase == "sustained"), None)
 
 
 def _finite(value: Any) -> Any:

@@ -102,7 +102,11 @@ def run_case(case: Case, setting_name: str) -> dict[str, Any]:
     except ImpactgenError as exc:
         row.update(status="failed", reason=str(exc), wall_s=time.perf_counter() - started)
         return row
-    s = result.summary
+    if not result.success:
+        row.update(status="failed", reason=result.message, wall_s=time.perf_counter() - started,
+                   impacts=len(result.impacts), nsteps=result.stats.get("nsteps", 0))
+        return row
+    s = result.first_impact  # the checks of one impact; the whole run's budget is checked below
     finite = bool(np.all(np.isfinite(result.y))) and all(
         math.isfinite(v) for v in (s["delta_T"], s["delta_r"], s["delta_max"]))
     scale = max(abs(s["T0"]), 1e-300)

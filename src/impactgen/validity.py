@@ -58,18 +58,18 @@ def validity_warnings(scene: Scene, impacts) -> list[str]:
     found: dict[str, list[tuple[int, str]]] = {}
     resolution = scene.solver.rtol * sum(scene.chain.length)  # the angles carry rtol |q|
     for k, impact in enumerate(impacts, start=1):
-        if 0 < impact.delta_m < RESOLUTION_MARGIN * resolution:
+        if 0 < impact.delta_max < RESOLUTION_MARGIN * resolution:
             found.setdefault("resolution", []).append(
-                (k, f"delta_max = {impact.delta_m:.3g} m is within {RESOLUTION_MARGIN:g} times the tip "
+                (k, f"delta_max = {impact.delta_max:.3g} m is within {RESOLUTION_MARGIN:g} times the tip "
                     f"position's resolution rtol * sum(L) = {resolution:.1g} m: the energy budget closes "
                     "only to about (resolution / delta_max)^2 of T0; tighten solver.rtol"))
     if scene.contact.model != "three-phase" or not impacts:
         return _grouped(found, len(impacts)) + chatter
     c = contact_constants(scene)
     for k, impact in enumerate(impacts, start=1):
-        w = impact.delta_m / c.delta_c
-        if impact.delta_m >= YIELD_ONSET * c.delta_c:
-            a = contact_radius(impact.delta_m, c.R, c.delta_c, c.B)
+        w = impact.delta_max / c.delta_c
+        if impact.delta_max >= YIELD_ONSET * c.delta_c:
+            a = contact_radius(impact.delta_max, c.R, c.delta_c, c.B)
             if a >= c.R:
                 found.setdefault("radius", []).append(
                     (k, f"contact radius a = {a:.3g} m reaches the tip radius {c.R:.3g} m; "

@@ -106,6 +106,9 @@ def measure(contender: Contender, name: str, scene: Scene, rtol: float, truth: T
         except Exception as exc:  # any contender may fail at some tolerance: record why
             run.status = f"failed: {type(exc).__name__}: {str(exc)[:120]}"
             return run
+        if not result.success:
+            run.status = f"failed: {result.message[:120]}"
+            return run
         times.append(time.perf_counter() - started)
         if times[-1] > settings.slow_s:
             break
