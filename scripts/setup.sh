@@ -42,5 +42,5 @@ if [ ! -x "$VENV/bin/python" ]; then
     echo "setup: creating the virtual environment $VENV"
     "$PYTHON" -m venv "$VENV"
 fi
-echo "setup: installing impactgen with its test, plot and benchmark extras into $VENV"
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[test,plot,bench]"
+echo "setup: installing impactgen with its test, plot, sweep and benchmark extras into $VENV"
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[test,plot,sweep,bench]"

@@ -97,3 +97,127 @@ def test_no_arguments_is_one_line_pointing_at_help():
     res = impactgen()
     assert res.returncode == 2 and "--help" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+# ----------------------------------------------------------------------------- whole runs, discovery
+
+def test_json_carries_the_impacts_beside_the_whole_run_summary():
+    res = impactgen("run", str(PAPER), "--json", "--set", "solver.t_end=0.2", "--set", "solver.rtol=1e-8")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    impacts = out["impacts"]
+    assert len(impacts) == out["summary"]["impacts"] >= 3
+    assert {"t_start", "t_end", "duration", "delta_max", "delta_r", "P_max", "R_res", "T_before",
+            "T_after", "W_normal", "W_friction", "switches"} <= set(impacts[0])
+    assert out["summary"]["t_final"] == pytest.approx(0.2)
+    assert out["first_impact"]["u_final"] != out["summary"]["u_final"]
+    assert out["first_impact"]["delta_r"] == impacts[0]["delta_r"]
+
+
+def test_run_prints_the_whole_run_and_a_table_of_impacts():
+    res = impactgen("run", "bouncing")
+    assert res.returncode == 0, res.stderr
+    assert "whole run to t = 2 s" in res.stdout and "sustained contact from" in res.stdout
+    assert "first impact:" in res.stdout and "t_start (s)" in res.stdout and "more)" in res.stdout
+    # contact phases in microseconds from the impact's start, not 4 figures of absolute time
+    assert "elastic 0-43.1" in res.stdout
+
+
+def test_solver_failure_with_json_prints_the_partial_result():
+    res = impactgen("run", str(PAPER), "--json", "--set", "solver.max_steps=5")
+    assert res.returncode == 4
+    out = json.loads(res.stdout)
+    assert out["status"] == "failed" and "max_steps" in out["message"]
+
+
+def test_chain_below_the_surface_exits_2_naming_the_link():
+    res = impactgen("run", str(PAPER), "--set", "initial.q_deg=[20.0, 30.0]")
+    assert res.returncode == 2
+    assert "initial.q" in res.stderr and "link 1" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_out_writes_trajectories_impacts_and_summary(tmp_path):
+    import pandas as pd
+    import pyarrow.parquet as pq
+    res = impactgen("run", str(PAPER), "--set", "solver.t_end=0.2", "--set", "solver.rtol=1e-8",
+                    "--out", str(tmp_path / "pq"))
+    assert res.returncode == 0, res.stderr
+    table = pq.read_table(tmp_path / "pq" / "trajectory.parquet")
+    assert table.schema.field("q1").metadata[b"unit"] == b"rad"
+    assert table.schema.field("F").metadata[b"unit"] == b"N"
+    frame = table.to_pandas()
+    assert {"t", "q1", "q2", "u1", "u2", "W_normal", "delta", "F", "T", "V", "phase"} <= set(frame.columns)
+    impacts = pd.read_parquet(tmp_path / "pq" / "impacts.parquet")
+    summary = json.loads((tmp_path / "pq" / "summary.json").read_text())
+    assert len(impacts) == summary["summary"]["impacts"]
+    assert frame["t"].iloc[-1] == pytest.approx(0.2)
+    res = impactgen("run", str(PAPER), "--out", str(tmp_path / "csv"), "--format", "csv")
+    assert res.returncode == 0, res.stderr
+    first = (tmp_path / "csv" / "trajectory.csv").read_text().splitlines()[0]
+    assert first.startswith("# units:") and "q1 [rad]" in first and "F [N]" in first
+    csv = pd.read_csv(tmp_path / "csv" / "trajectory.csv", comment="#")
+    assert csv["delta"].max() == pytest.approx(2.05e-5, rel=1e-2)
+
+
+def test_examples_are_listed_copied_and_run_from_another_folder(tmp_path):
+    res = impactgen("examples", cwd=tmp_path)
+    assert res.returncode == 0
+    for name in ("paper", "chain3-free-flight", "coulomb", "bouncing", "aluminium-on-steel"):
+        assert name in res.stdout
+    res = impactgen("examples", "coulomb", cwd=tmp_path)
+    assert res.returncode == 0 and (tmp_path / "coulomb.toml").exists()
+    res = impactgen("run", "paper", "--json", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout)["summary"]["delta_r"] == pytest.approx(5.57e-6, rel=2e-3)
+    res = impactgen("run", "nonesuch", cwd=tmp_path)
+    assert res.returncode == 2 and "impactgen examples" in res.stderr
+
+
+def test_version_and_help_texts():
+    import argparse
+    import impactgen as package
+    from impactgen import cli
+    res = impactgen("--version")
+    assert res.returncode == 0 and package.__version__ in res.stdout
+    parser = cli._parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for sub in [parser, *commands.choices.values()]:
+        for action in sub._actions:
+            if not isinstance(action, argparse._SubParsersAction):
+                assert action.help, f"{sub.prog} {action.option_strings or action.dest} has no help text"
+    assert impactgen("run", "--help").returncode == 0
+
+
+def test_links_writes_a_scene_to_run(tmp_path):
+    res = impactgen("--links", "3", "--out", str(tmp_path / "c3"))
+    assert res.returncode == 0, res.stderr
+    scene = tmp_path / "c3" / "scene.toml"
+    assert scene.exists() and str(scene) in res.stdout
+    res = impactgen("run", str(scene), "--json", "--set", "solver.rtol=1e-8")
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout)["scene"] == "steel-chain-3"
+
+
+def test_plot_draws_the_whole_run_one_impact_or_a_window(tmp_path):
+    pytest.importorskip("matplotlib")
+    res = impactgen("plot", str(PAPER), "--set", "solver.t_end=0.2", "--set", "solver.rtol=1e-8",
+                    "--out", str(tmp_path / "run"))
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "run" / "run_overview.png").exists()
+    res = impactgen("plot", str(PAPER), "--set", "solver.t_end=0.2", "--set", "solver.rtol=1e-8",
+                    "--impact", "2", "--out", str(tmp_path / "k2"))
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "k2" / "deformation_force.png").exists()
+    res = impactgen("plot", str(PAPER), "--window", "0:0.0002", "--out", str(tmp_path / "w"))
+    assert res.returncode == 0 and (tmp_path / "w" / "angles.png").exists()
+    res = impactgen("plot", str(PAPER), "--impact", "9", "--out", str(tmp_path / "bad"))
+    assert res.returncode == 2 and "--impact" in res.stderr
+
+
+def test_stability_prints_its_pass_count(tmp_path, monkeypatch, capsys):
+    from impactgen import cli, stability
+    monkeypatch.setattr(stability, "catalogue", lambda quick=False: [stability.Case("paper", "reference", {})])
+    assert cli.main(["stability", "--quick", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "stability: 2 of 2 runs passed" in out

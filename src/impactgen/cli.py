@@ -1,10 +1,12 @@
 """The `impactgen` command.
 
-    impactgen --links N [--out DIR]            generate and compile an N-link steel chain
+    impactgen --links N [--out DIR]            generate and compile an N-link steel chain (+ its scene)
     impactgen generate SCENE [--out DIR]       generate and compile what SCENE needs
-    impactgen run SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
+    impactgen run SCENE|EXAMPLE [--engine c|reference] [--method M] [--json] [--set KEY=VALUE ...]
+                  [--out DIR [--format parquet|csv]]
+    impactgen examples [NAME [--out PATH]]     list the shipped example scenes, or copy one out
     impactgen crosscheck [--links 1-6] [--random N] [--seed S] [--json]
-    impactgen plot SCENE [--out DIR] [--set KEY=VALUE ...]
+    impactgen plot SCENE [--out DIR] [--impact K | --window T0:T1] [--set KEY=VALUE ...]
     impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
     impactgen stability [--quick] [--json] [--out DIR]
 
@@ -15,13 +17,17 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
 from pathlib import Path
 from typing import Sequence
 
-from .errors import ImpactgenError, SceneError
+from .errors import ImpactgenError, SceneError, SolverError
+
+SET_HELP = "override a scene value (TOML), e.g. --set initial.u=[-0.1,-0.3] or --set initial.u[2]=-0.3"
+SCENE_HELP = "a scene file (TOML), or the name of a shipped example (see 'impactgen examples')"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -32,59 +38,77 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
+    from . import __version__
     p = _Parser(prog="impactgen", description="Generate fast C for an n-link pendulum impact "
-                "and simulate it (MODEL: Hertz, Jackson-Green, restitution, friction).")
+                "and simulate it (MODEL: Hertz, Jackson-Green, restitution, friction).",
+                epilog="Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure.")
+    p.add_argument("--version", action="version", version=f"impactgen {__version__}")
     p.add_argument("--links", type=int, metavar="N", help="generate and compile an N-link "
-                   "steel chain (the paper's materials) and print where the files are")
-    p.add_argument("--out", type=Path, help="folder for the generated C (with --links)")
-    p.add_argument("--prefix", default="model", help="C name prefix of the generated files")
+                   "steel chain (the paper's materials), write its scene, and print where the files are")
+    p.add_argument("--out", type=Path, help="folder for the generated C and scene (with --links; "
+                   "default generated/chainN)")
+    p.add_argument("--prefix", default="model", help="C name prefix of the generated files (default model)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
-    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+    sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
 
-    run = sub.add_parser("run", help="simulate a scene")
-    run.add_argument("scene", type=Path)
-    run.add_argument("--engine", choices=("c", "reference"), default="c")
-    run.add_argument("--method", default=None, help="solve_ivp method of the reference engine "
-                     "(Radau, BDF, LSODA, DOP853, RK45)")
+    run = sub.add_parser("run", help="simulate a scene", description="Simulate a scene and print "
+                         "its first impact and, for a run to a time, the whole run.")
+    run.add_argument("scene", type=Path, help=SCENE_HELP)
+    run.add_argument("--engine", choices=("c", "reference"), default="c",
+                     help="c: generated C with CVODE (default); reference: the pure-Python engine")
+    run.add_argument("--method", default=None, help="integrator: bdf or adams (c engine); Radau, BDF, "
+                     "LSODA, DOP853 or RK45 (reference engine)")
     run.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a scene value, e.g. --set initial.u=[-0.1,-0.3]")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    run.add_argument("--out", type=Path, default=None, help="also write the trajectories, the impacts "
+                     "table and summary.json into this folder")
+    run.add_argument("--format", choices=("parquet", "csv"), default=None,
+                     help="table format with --out (default parquet if pyarrow is installed, else csv)")
     run.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    ex = sub.add_parser("examples", help="list the shipped example scenes, or copy one out")
+    ex.add_argument("name", nargs="?", help="the example to copy out")
+    ex.add_argument("--out", type=Path, default=None, help="file or folder to copy it to (default ./NAME.toml)")
+    ex.add_argument("--debug", action="store_true", help="show tracebacks")
 
     cc = sub.add_parser("crosscheck", help="compare the C engine with the reference engine")
     cc.add_argument("--links", default="1-6", help="steel chains to run, e.g. 1-6 or 2,4")
     cc.add_argument("--random", type=int, default=0, metavar="N", help="N random scenes")
-    cc.add_argument("--seed", type=int, default=0)
+    cc.add_argument("--seed", type=int, default=0, help="seed of the random scenes")
     cc.add_argument("--rtol", type=float, default=1e-11, help="solver rtol of both engines")
     cc.add_argument("--tol", type=float, default=1e-7, help="largest relative difference allowed")
     cc.add_argument("--method", default="Radau", help="solve_ivp method of the reference")
-    cc.add_argument("--json", action="store_true")
+    cc.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     cc.add_argument("--debug", action="store_true", help="show tracebacks")
 
-    plot = sub.add_parser("plot", help="figures of one simulation (the paper's Figures 4-8)")
-    plot.add_argument("scene", type=Path)
+    plot = sub.add_parser("plot", help="figures of one simulation (the paper's Figures 4-8, or the whole run)")
+    plot.add_argument("scene", type=Path, help=SCENE_HELP)
     plot.add_argument("--out", type=Path, help="folder for the PNG files (default plots/<name>)")
-    plot.add_argument("--engine", choices=("c", "reference"), default="c")
-    plot.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    plot.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    which = plot.add_mutually_exclusive_group()
+    which.add_argument("--impact", type=int, metavar="K", help="the figures of impact K (from 1)")
+    which.add_argument("--window", metavar="T0:T1", help="the figures between two times in s")
+    which.add_argument("--whole-run", action="store_true", help="the whole-run view even for one impact")
+    plot.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     plot.add_argument("--debug", action="store_true", help="show tracebacks")
 
     bench = sub.add_parser("bench", help="work-precision, RHS and scaling benchmarks with a report")
     bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
-    bench.add_argument("--out", type=Path, default=Path("bench-results"))
-    bench.add_argument("--parts", default="workprecision,rhs,scaling")
+    bench.add_argument("--out", type=Path, default=Path("bench-results"), help="report folder")
+    bench.add_argument("--parts", default="workprecision,rhs,scaling", help="which benchmarks, comma-separated")
     bench.add_argument("--debug", action="store_true", help="show tracebacks")
 
     stab = sub.add_parser("stability", help="run the catalogue of stiff and extreme cases")
     stab.add_argument("--quick", action="store_true", help="fewer cases and settings")
     stab.add_argument("--json", action="store_true", help="print the rows as one JSON object")
-    stab.add_argument("--out", type=Path, default=Path("stability-results"))
+    stab.add_argument("--out", type=Path, default=Path("stability-results"), help="report folder")
     stab.add_argument("--debug", action="store_true", help="show tracebacks")
 
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
-    gen.add_argument("scene", type=Path)
-    gen.add_argument("--out", type=Path)
-    gen.add_argument("--prefix", default="model")
-    gen.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    gen.add_argument("scene", type=Path, help=SCENE_HELP)
+    gen.add_argument("--out", type=Path, help="folder for the C files (default generated/<name>)")
+    gen.add_argument("--prefix", default="model", help="C name prefix (default model)")
+    gen.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     gen.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
 
@@ -97,19 +121,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = _parser().parse_args(argv)
         if args.command == "run":
             return _run(args)
+        if args.command == "examples":
+            return _examples(args)
         if args.command == "crosscheck":
             return _crosscheck(args)
         if args.command == "plot":
             return _plot(args)
         if args.command == "stability":
-            from .stability import run_catalogue, write_report
-            rows = run_catalogue(args.quick)
-            path = write_report(rows, args.out, args.quick)
-            if args.json:
-                print(json.dumps({"report": str(path), "rows": rows}, default=lambda v: None))
-            else:
-                print(path)
-            return 0
+            return _stability(args)
         if args.command == "bench":
             from .bench import run_benchmarks
             parts = {p.strip() for p in args.parts.split(",") if p.strip()}
@@ -130,8 +149,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise SceneError("--links", f"expected a number of links from 1 to 60, got {args.links}")
             from .scene import steel_chain_scene
             return _generate(steel_chain_scene(args.links),
-                             args.out or Path("generated") / f"chain{args.links}", args.prefix)
-        raise SceneError(None, "nothing to do: give a command (run, generate, crosscheck) or "
+                             args.out or Path("generated") / f"chain{args.links}", args.prefix,
+                             write_scene=True)
+        raise SceneError(None, "nothing to do: give a command (run, examples, generate, plot, ...) or "
                                "--links N; see 'impactgen --help'")
     except ImpactgenError as exc:
         if debug:
@@ -147,7 +167,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # the reader (head, say) stopped reading: not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
-    except SystemExit as exc:  # --help
+    except SystemExit as exc:  # --help, --version
         return exc.code if isinstance(exc.code, int) else 0
 
 
@@ -163,7 +183,7 @@ def _overrides(items: list[str]) -> dict:
     return dict(parse_override(item) for item in items)
 
 
-def _generate(scene, out: Path, prefix: str) -> int:
+def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
     from .build import compile_model
     from .codegen.emit import generate_model
     from .engines import model_spec
@@ -178,10 +198,14 @@ def _generate(scene, out: Path, prefix: str) -> int:
         out.mkdir(parents=True, exist_ok=True)
         (out / f"{prefix}.h").write_text(gen.header)
         (out / f"{prefix}.c").write_text(gen.source)
+        if write_scene:
+            (out / "scene.toml").write_text(scene.to_toml())
     except OSError as exc:
         raise SceneError("--out", f"cannot write to {out}: {exc}") from None
     print(f"{spec.slug}: {out / (prefix + '.h')}, {out / (prefix + '.c')} "
           f"(plain C99, link with -lm)")
+    if write_scene:
+        print(f"scene: {out / 'scene.toml'} (simulate it: impactgen run {out / 'scene.toml'})")
     print(f"compiled with CVODE: {compiled.path} ({elapsed:.1f} s)")
     return 0
 
@@ -189,32 +213,85 @@ def _generate(scene, out: Path, prefix: str) -> int:
 def _run(args: argparse.Namespace) -> int:
     import impactgen
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
-    options = {"method": args.method} if args.method and args.engine == "reference" else {}
-    if args.method and args.engine != "reference":
-        raise SceneError("--method", "only the reference engine takes --method (the C engine "
-                         "uses solver.method = bdf | adams)")
-    result = impactgen.simulate(scene, engine=args.engine, **options)
+    if args.format and args.out is None:
+        raise SceneError("--format", "goes with --out DIR (the folder to write the tables into)")
+    result = impactgen.simulate(scene, engine=args.engine, method=args.method)
+    written = []
+    if args.out is not None:
+        from .export import write_run
+        written = write_run(result, args.out, args.format)
     if args.json:
         print(json.dumps(result.to_json_dict()))
-        return 0
-    print(format_summary(result))
+    else:
+        print(format_summary(result))
+        for path in written:
+            print(f"wrote {path}")
     for warning in result.warnings:
         print(f"impactgen: warning: {warning}", file=sys.stderr)
+    if not result.success:  # the partial result is printed (and written) above
+        print(f"impactgen: error: {_one_line(result.message)}", file=sys.stderr)
+        return SolverError.exit_code
     return 0
+
+
+def _examples(args: argparse.Namespace) -> int:
+    from .examples import copy_example, example_description, example_names
+    if args.name is None:
+        if args.out is not None:
+            raise SceneError("--out", "name the example to copy: impactgen examples NAME --out PATH")
+        for name in example_names():
+            print(f"{name:<22} {example_description(name)}")
+        print("run one with 'impactgen run NAME'; copy one out with 'impactgen examples NAME'")
+        return 0
+    path = copy_example(args.name, args.out if args.out is not None else Path.cwd())
+    print(path)
+    return 0
+
+
+def _stability(args: argparse.Namespace) -> int:
+    from .stability import run_catalogue, write_report
+    rows = run_catalogue(args.quick)
+    path = write_report(rows, args.out, args.quick)
+    if args.json:
+        print(json.dumps({"report": str(path), "rows": rows}, default=lambda v: None))
+        return 0
+    ok = sum(r["status"] in ("ok", "no-impact") for r in rows)
+    print(f"stability: {ok} of {len(rows)} runs passed, {len(rows) - ok} failed or failed a check")
+    for r in rows:
+        if r["status"] not in ("ok", "no-impact"):
+            print(f"  {r['status']}: {r['case']} ({r['setting']}): {_one_line(str(r.get('reason', '')))[:160]}")
+    print(path)
+    return 0
+
+
+def _window_arg(text: str) -> tuple[float, float]:
+    try:
+        t0, t1 = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise SceneError("--window", f"expected T0:T1 in seconds, e.g. 0:0.01, got {text!r}") from None
+    if not (math.isfinite(t0) and math.isfinite(t1)) or t1 <= t0:
+        raise SceneError("--window", f"expected two finite times T0 < T1, got {text!r}")
+    return t0, t1
 
 
 def _plot(args: argparse.Namespace) -> int:
     import impactgen
     from .plots import plot_simulation
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    window = _window_arg(args.window) if args.window else None
+    if args.impact is not None and args.impact < 1:
+        raise SceneError("--impact", f"impacts are numbered from 1, got {args.impact}")
     result = impactgen.simulate(scene, engine=args.engine)
     out = args.out or Path("plots") / scene.name
     try:
-        paths = plot_simulation(result, out)
+        paths = plot_simulation(result, out, impact=args.impact, window=window, whole_run=args.whole_run)
     except OSError as exc:
         raise SceneError("--out", f"cannot write the figures to {out}: {exc}") from None
     for path in paths:
         print(path)
+    if not result.success:
+        print(f"impactgen: error: {_one_line(result.message)}", file=sys.stderr)
+        return SolverError.exit_code
     return 0
 
 
@@ -266,37 +343,83 @@ def _crosscheck(args: argparse.Namespace) -> int:
     return 0 if passed else 1
 
 
+IMPACT_ROWS_SHOWN = (5, 3)  # the per-impact table shows the first and the last few impacts
+
+
+def _phase_line(result) -> str:
+    """The first impact's phases, times from its start in microseconds (a contact lasts
+    about 0.5 ms: absolute times in 4 figures would hide it)."""
+    if not result.impacts:
+        return "phases: " + ", ".join(f"{p.phase} [{p.t0:.9g}, {p.t1:.9g}] s" for p in result.phases[:12])
+    impact = result.impacts[0]
+    end = impact.t_end if impact.t_end is not None else math.inf
+    spans = [p for p in result.phases if p.phase != "free" and impact.t_start <= p.t0 <= end]
+    if len(spans) > 12:
+        spans = spans[:12]
+    us = 1e6
+    text = ", ".join(f"{p.phase}{' (' + p.friction + ')' if p.friction else ''} "
+                     f"{(p.t0 - impact.t_start) * us:.6g}-{(p.t1 - impact.t_start) * us:.6g}"
+                     for p in spans)
+    return f"phases of impact 1 (us from its start at t = {impact.t_start:.9g} s): {text}"
+
+
+def _impacts_table(result) -> list[str]:
+    head, tail = IMPACT_ROWS_SHOWN
+    rows = list(enumerate(result.impacts, start=1))
+    shown = rows if len(rows) <= head + tail + 1 else rows[:head] + [None] + rows[-tail:]
+    lines = [f"{'impact':>6} {'t_start (s)':>13} {'duration (us)':>14} {'delta_max (m)':>14} "
+             f"{'delta_r (m)':>12} {'P_max (N)':>10} {'T before (J)':>13} {'T after (J)':>12}"]
+    for row in shown:
+        if row is None:
+            lines.append(f"{'...':>6} ({len(rows) - head - tail} more)")
+            continue
+        k, i = row
+        duration = f"{i.duration * 1e6:14.6g}" if i.duration is not None else f"{'(open)':>14}"
+        lines.append(f"{k:>6} {i.t_start:13.7g} {duration} {i.delta_max:14.4g} {i.delta_r:12.4g} "
+                     f"{i.P_max:10.4g} {i.T_before:13.6g} {i.T_after:12.6g}")
+    return lines
+
+
 def format_summary(result) -> str:
-    s = result.summary
-    e = s["energy"]
+    """The text `impactgen run` prints: the first impact, then the whole run if it went on."""
+    first, run = result.first_impact, result.summary
     lines = [f"{result.scene.name} ({result.engine} engine): {result.status}"
-             + (f", {result.message}" if result.message else "")]
-    spans = [f"{p.phase}{' (' + p.friction + ')' if p.friction else ''} [{p.t0:.4g}, {p.t1:.4g}] s"
-             for p in result.phases]
-    if len(spans) > 12:  # repeated impacts: the first and the last few
-        spans = spans[:4] + [f"... {len(spans) - 8} more ..."] + spans[-4:]
-    lines.append("phases: " + ", ".join(spans))
-    if s["impacts"]:
+             + (f", {result.message}" if result.message else ""), _phase_line(result)]
+    if result.impacts:
+        s = first
+        e = s["energy"]
         lines += [
-            f"max deformation   delta_m = {s['delta_max']:.4g} m",
-            f"permanent         delta_r = {s['delta_r']:.4g} m",
-            f"max force         P_m     = {s['P_max']:.4g} N",
-            f"unloading radius  R_res   = {s['R_res']:.4g} m",
-            f"impact duration           = {s['t_contact']:.4g} s",
+            "first impact:",
+            f"  max deformation   delta_m = {s['delta_max']:.6g} m",
+            f"  permanent         delta_r = {s['delta_r']:.6g} m",
+            f"  max force         P_m     = {s['P_max']:.6g} N",
+            f"  unloading radius  R_res   = {s['R_res']:.6g} m",
+            f"  impact duration           = {s['t_contact']:.6g} s",
+            f"  kinetic energy    T0 = {s['T0']:.6g} J, Tf = {s['Tf']:.6g} J, Delta T = {s['delta_T']:.4g} J",
+            f"  energy budget     W_normal = {e['W_normal']:.4g} J, W_friction = {e['W_friction']:.4g} J, "
+            f"W_gravity = {e['W_gravity']:.4g} J, residual = {e['residual']:.2g} J",
+            "  speeds after      u = [" + ", ".join(f"{v:.6g}" for v in s["u_final"]) + "] rad/s",
         ]
         if s["stick_slip"]:
-            lines.append("stick-slip        " + ", ".join(f"{w['from']} -> {w['to']} at {w['t']:.4g} s"
-                                                       for w in s["stick_slip"]))
-        if s["impacts"] > 1:
-            lines.append(f"impacts           {s['impacts']} (the summary is the first)")
-    lines += [
-        f"kinetic energy    T0 = {s['T0']:.6g} J, Tf = {s['Tf']:.6g} J, Delta T = {s['delta_T']:.4g} J",
-        f"energy budget     W_normal = {e['W_normal']:.4g} J, W_friction = {e['W_friction']:.4g} J, "
-        f"W_gravity = {e['W_gravity']:.4g} J, residual = {e['residual']:.2g} J",
-        "final speeds      u = [" + ", ".join(f"{v:.6g}" for v in s["u_final"]) + "] rad/s",
-        f"solver            {result.stats.get('nsteps', 0)} steps, {result.stats.get('nfev', 0)} RHS calls, "
-        f"{result.stats.get('wall_s', 0.0) * 1e3:.2f} ms",
-    ]
+            lines.append("  stick-slip        " + ", ".join(f"{w['from']} -> {w['to']} at {w['t']:.9g} s"
+                                                         for w in s["stick_slip"]))
+    if run is not first:
+        e = run["energy"]
+        sustained = (f", sustained contact from t = {run['t_sustained']:.6g} s"
+                     if run["t_sustained"] is not None else "")
+        lines += [
+            f"whole run to t = {run['t_final']:.6g} s: {run['impacts']} impacts{sustained}",
+            "  final angles      q = [" + ", ".join(f"{v:.6g}" for v in run["q_final"]) + "] rad",
+            "  final speeds      u = [" + ", ".join(f"{v:.6g}" for v in run["u_final"]) + "] rad/s",
+            f"  kinetic energy    T(0) = {run['T0']:.6g} J, T(end) = {run['Tf']:.6g} J",
+            f"  energy budget     W_normal = {e['W_normal']:.4g} J, W_friction = {e['W_friction']:.4g} J, "
+            f"W_gravity = {e['W_gravity']:.4g} J, residual = {e['residual']:.2g} J",
+            f"  deepest dent      delta_r = {run['delta_r']:.6g} m, largest force P_m = {run['P_max']:.6g} N",
+        ]
+    if len(result.impacts) > 1:
+        lines += ["impacts:"] + ["  " + line for line in _impacts_table(result)]
+    lines.append(f"solver            {result.stats.get('nsteps', 0)} steps, {result.stats.get('nfev', 0)} RHS "
+                 f"calls, {result.stats.get('wall_s', 0.0) * 1e3:.2f} ms")
     return "\n".join(lines)
 
 
