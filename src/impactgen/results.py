@@ -92,6 +92,11 @@ class Trajectory:
     outputs: dict[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
 
 
+def _output(name: str, doc: str) -> property:
+    """A read-only view of one output at the samples shown (every step, or t_eval)."""
+    return property(lambda self: self._shown.outputs[name], doc=doc)
+
+
 @dataclass
 class SimulationResult:
     """The outcome of `impactgen.simulate`, shaped like scipy's solve_ivp result.
@@ -196,45 +201,20 @@ class SimulationResult:
         out.setdefault("F_f", np.zeros_like(self.t))
         return out
 
-    @property
-    def x_B(self) -> np.ndarray:
-        return self._shown.outputs["x_B"]
-
-    @property
-    def y_B(self) -> np.ndarray:
-        return self._shown.outputs["y_B"]
-
-    @property
-    def v_Bx(self) -> np.ndarray:
-        return self._shown.outputs["v_Bx"]
-
-    @property
-    def v_By(self) -> np.ndarray:
-        return self._shown.outputs["v_By"]
-
-    @property
-    def delta(self) -> np.ndarray:
-        return self._shown.outputs["delta"]
-
-    @property
-    def delta_rate(self) -> np.ndarray:
-        return self._shown.outputs["delta_rate"]
-
-    @property
-    def F(self) -> np.ndarray:
-        return self._shown.outputs["F"]
+    x_B = _output("x_B", "tip position along the surface (m)")
+    y_B = _output("y_B", "tip height (m)")
+    v_Bx = _output("v_Bx", "tip velocity along the surface (m/s)")
+    v_By = _output("v_By", "tip velocity upwards (m/s)")
+    delta = _output("delta", "penetration of the tip into the surface (m)")
+    delta_rate = _output("delta_rate", "its rate (m/s)")
+    F = _output("F", "normal contact force (N)")
 
     @property
     def F_f(self) -> np.ndarray:
         return self._shown.outputs.get("F_f", np.zeros_like(self.t))
 
-    @property
-    def T(self) -> np.ndarray:
-        return self._shown.outputs["T"]
-
-    @property
-    def V(self) -> np.ndarray:
-        return self._shown.outputs["V"]
+    T = _output("T", "kinetic energy of the chain (J)")
+    V = _output("V", "potential energy of gravity (J)")
 
     @property
     def v_B(self) -> np.ndarray:
