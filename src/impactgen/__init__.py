@@ -8,9 +8,10 @@
 from .engines import simulate
 from .errors import BuildError, ImpactgenError, SceneError, SolverError
 from .scene import Scene, load_scene, scene_from_dict
+from .sweep import sweep
 
 __version__ = "0.1.0"
 
 
 __all__ = ["BuildError", "ImpactgenError", "SceneError", "SolverError", "Scene", "load_scene",
-           "scene_from_dict", "simulate", "__version__"]
+           "scene_from_dict", "simulate", "sweep", "__version__"]

@@ -71,6 +71,23 @@ def _parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", type=Path, default=None, help="file or folder to copy it to (default ./NAME.toml)")
     ex.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    sw = sub.add_parser("sweep", help="run a scene over a grid or random draws of its values",
+                        description="One row per case, in a table (Parquet with --out). KEY is a scene "
+                        "key, an element counted from 1 (initial.u[2]); SPEC a list [a,b], linspace(a,b,n), "
+                        "logspace(a,b,n), or with --random uniform(a,b), normal(mu,sigma), lognormal(mu,sigma).")
+    sw.add_argument("scene", type=Path, help=SCENE_HELP)
+    sw.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
+                    help="a varied key and its values; several make a full grid")
+    sw.add_argument("--random", type=int, default=0, metavar="N", help="draw N cases from the distributions")
+    sw.add_argument("--seed", type=int, default=0, help="seed of the random draws (default 0)")
+    sw.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    sw.add_argument("--workers", type=int, default=None, metavar="K",
+                    help="processes of the local pool (default: all cores)")
+    sw.add_argument("--out", type=Path, default=None, help="folder for sweep.parquet; the same command "
+                    "resumes an interrupted sweep there")
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    sw.add_argument("--debug", action="store_true", help="show tracebacks")
+
     cc = sub.add_parser("crosscheck", help="compare the C engine with the reference engine")
     cc.add_argument("--links", default="1-6", help="steel chains to run, e.g. 1-6 or 2,4")
     cc.add_argument("--random", type=int, default=0, metavar="N", help="N random scenes")
@@ -123,6 +140,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args)
         if args.command == "examples":
             return _examples(args)
+        if args.command == "sweep":
+            return _sweep(args)
         if args.command == "crosscheck":
             return _crosscheck(args)
         if args.command == "plot":
@@ -231,6 +250,39 @@ def _run(args: argparse.Namespace) -> int:
     if not result.success:  # the partial result is printed (and written) above
         print(f"impactgen: error: {_one_line(result.message)}", file=sys.stderr)
         return SolverError.exit_code
+    return 0
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    import signal
+
+    import impactgen
+    from .sweep import SweepSpec, run_sweep
+    scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    spec = SweepSpec.from_vary(args.vary, random=args.random, seed=args.seed)
+    # SIGTERM ends the sweep as Ctrl-C does: the finished parts are already on disk
+    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
+    bars = []  # the progress bar starts with the first finished cases, after every check
+
+    def progress(count: int) -> None:
+        if not bars:
+            from tqdm import tqdm
+            bars.append(tqdm(total=spec.count(), unit="case", file=sys.stderr, smoothing=0.1))
+        bars[0].update(count)
+    try:
+        frame = run_sweep(scene, spec, workers=args.workers, out=args.out,
+                          progress=None if args.quiet else progress)
+    finally:
+        for bar in bars:
+            bar.close()
+    counts = frame["status"].value_counts().to_dict()
+    print(f"{len(frame)} cases: " + ", ".join(f"{n} {status}" for status, n in sorted(counts.items())))
+    if args.out is not None:
+        print(args.out / "sweep.parquet")
+    else:
+        shown = [c for c in frame.columns if c in ("case", *(a.key for a in spec.axes), "status",
+                                                   "delta_max", "delta_r", "P_max", "delta_T", "t_contact")]
+        print(frame[shown].to_string(index=False, max_rows=40))
     return 0
 
 

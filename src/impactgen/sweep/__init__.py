@@ -1,0 +1,62 @@
+"""Parameter sweeps and ensembles: many cases of one scene, one row per case.
+
+    import impactgen
+    table = impactgen.sweep("paper", vary={"initial.u[2]": "linspace(-0.4,-0.1,4)"})
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..scene import Scene, load_scene
+from .run import run_sweep
+from .spec import SweepSpec
+
+
+def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random: int = 0, seed: int = 0,
+          workers: int | None = None, out: str | Path | None = None, progress=None):
+    """Run `scene` once per case of a sweep and return the table of results.
+
+    Parameters
+    ----------
+    scene : Scene, str or Path
+        A checked scene, a scene file, or a shipped example's name.
+    vary : mapping or list of str
+        KEY -> SPEC, where KEY is a scene key (an element counted from 1, e.g.
+        ``"initial.u[2]"``) and SPEC a list of values, ``"linspace(a,b,n)"``,
+        ``"logspace(a,b,n)"``, or with `random` ``"uniform(a,b)"``, ``"normal(mu,sigma)"``,
+        ``"lognormal(mu,sigma)"``; or ``--vary`` strings ``"KEY=SPEC"``. Several keys make a
+        full grid.
+    random : int, default 0
+        Draw this many cases from the distributions instead of the grid.
+    seed : int, default 0
+        Seed of the random draws.
+    workers : int, optional
+        Processes of the local pool (default: all cores; 1 runs in this process).
+    out : str or Path, optional
+        Folder for the result: sweep.parquet (scene and specification in its metadata) and
+        the parts written as chunks finish; the same call resumes an interrupted sweep.
+    progress : callable, optional
+        Called with the number of cases each time some finish.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per case, in case order: ``case``, the varied keys, every scalar summary
+        field (``delta_r``, ``u_final[1]``, ``energy.W_normal``, ...), ``status``
+        ("ok", "no-impact", "failed" or "invalid"), ``message``, ``warnings``, ``wall_s``.
+
+    Raises
+    ------
+    SceneError
+        A bad specification (unknown key, index out of range, malformed range, count 0),
+        named, before any case runs.
+    """
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    spec = SweepSpec.from_vary(vary, random=random, seed=seed)
+    return run_sweep(scene, spec, workers=workers, out=Path(out) if out is not None else None,
+                     progress=progress)
+
+
+__all__ = ["SweepSpec", "run_sweep", "sweep"]

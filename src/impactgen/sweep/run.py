@@ -1,0 +1,199 @@
+"""Run a sweep: every case through `simulate`, on a local process pool, one row per case.
+
+A case that fails (a solver failure, or a combination the scene checks refuse) is a row with
+its status and message; the sweep goes on. With an output folder every finished chunk is
+written at once as its own Parquet part, so an interrupted sweep keeps its rows, and the same
+command resumes, computing only the missing cases. Two sweeps into one folder are refused.
+"""
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+from ..errors import ImpactgenError, SceneError
+from ..scene import Scene, scene_from_dict
+from .spec import SweepSpec
+
+CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep overhead small
+MAX_CHUNK = 500  # cases; a lost chunk (a dead worker) costs at most this much work again
+STATUS_INVALID = "invalid"  # the scene checks refused the case's values
+RESULT_FILE = "sweep.parquet"
+
+Progress = Callable[[int], None]  # called with the number of cases just finished
+
+
+def case_row(base: Scene, index: int, overrides: dict[str, Any]) -> dict[str, Any]:
+    """One case: its varied inputs, every scalar summary field, status, message, warnings, time."""
+    import impactgen
+    started = time.perf_counter()
+    row: dict[str, Any] = {"case": index, **overrides}
+    try:
+        scene = base.replace(overrides)
+    except SceneError as exc:
+        row.update(status=STATUS_INVALID, message=str(exc), warnings="",
+                   wall_s=time.perf_counter() - started)
+        return row
+    try:
+        result = impactgen.simulate(scene)
+    except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
+        row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
+        return row
+    row.update(flat_summary(result.summary))
+    row.update(status=result.status, message=result.message, warnings=" | ".join(result.warnings),
+               wall_s=time.perf_counter() - started)
+    return row
+
+
+def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
+    """The summary's scalars as columns: u_final[1].., q_final[1].., W_normal, ..."""
+    row: dict[str, Any] = {}
+    for key, value in summary.items():
+        if key in ("switches", "stick_slip"):
+            row[f"n_{key}"] = len(value)
+        elif key == "energy":
+            row.update({f"energy.{k}": v for k, v in value.items()})
+        elif isinstance(value, list):
+            row.update({f"{key}[{i}]": v for i, v in enumerate(value, start=1)})
+        else:
+            row[key] = value
+    return row
+
+
+def _run_chunk(scene_dict: dict[str, Any], cases: list[tuple[int, dict[str, Any]]]) -> list[dict[str, Any]]:
+    base = scene_from_dict(scene_dict)
+    return [case_row(base, index, overrides) for index, overrides in cases]
+
+
+def chunked(cases: list[tuple[int, dict[str, Any]]], workers: int) -> list[list[tuple[int, dict[str, Any]]]]:
+    size = max(1, min(MAX_CHUNK, -(-len(cases) // (workers * CHUNKS_PER_WORKER))))
+    return [cases[i:i + size] for i in range(0, len(cases), size)]
+
+
+def structure_order(spec: SweepSpec, cases: list[dict[str, Any]]) -> list[int]:
+    """Case indices with the cases of one model structure together (links, contact model,
+    friction on or off and its kind), so a worker loads each compiled model once."""
+    structural = [a.key for a in spec.axes if a.key.split("[")[0] in
+                  ("chain.links", "contact.model", "contact.friction", "contact.friction_mode",
+                   "solver.t_end", "solver.jacobian", "solver.method")]
+    if not structural:
+        return list(range(len(cases)))
+
+    def key(i: int) -> tuple:
+        return tuple(repr(cases[i][k] if k != "contact.friction" else cases[i][k] > 0) for k in structural)
+    return sorted(range(len(cases)), key=key)
+
+
+class OutputFolder:
+    """Parts written chunk by chunk, a lock against a second sweep, and the final table."""
+
+    def __init__(self, path: Path, scene: Scene, spec: SweepSpec):
+        self.path = path
+        self.parts = path / "parts"
+        self.meta = {"impactgen.scene": scene.to_toml(), "impactgen.sweep": spec.describe()}
+        try:
+            self.parts.mkdir(parents=True, exist_ok=True)
+            self._lock = open(path / ".lock", "w")
+        except OSError as exc:
+            raise SceneError("--out", f"cannot use the folder {path}: {exc}") from None
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self._lock.close()
+            raise SceneError("--out", f"another sweep is writing into {path}; wait for it or choose "
+                                      "another folder") from None
+        stamp = path / "sweep.json"
+        described = {"scene": self.meta["impactgen.scene"], "sweep": spec.describe()}
+        if stamp.exists() and json.loads(stamp.read_text()) != described:
+            self.close()
+            raise SceneError("--out", f"{path} holds a different sweep (another scene or "
+                                      "specification); choose another folder to start a new one")
+        stamp.write_text(json.dumps(described, indent=1) + "\n")
+
+    def done(self) -> dict[int, dict[str, Any]]:
+        """Rows of the cases finished in earlier runs (a resume computes only the others)."""
+        import pyarrow.parquet as pq
+        rows: dict[int, dict[str, Any]] = {}
+        for part in sorted(self.parts.glob("part-*.parquet")):
+            for row in pq.read_table(part).to_pylist():
+                rows[int(row["case"])] = row
+        return rows
+
+    def write_part(self, rows: list[dict[str, Any]]) -> None:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        first = min(r["case"] for r in rows)
+        final = self.parts / f"part-{first:09d}-{os.getpid()}-{time.monotonic_ns()}.parquet"
+        temporary = final.with_suffix(".tmp")
+        pq.write_table(pa.Table.from_pylist(rows), temporary)
+        os.replace(temporary, final)  # a part is on disk whole or not at all
+
+    def write_result(self, frame) -> Path:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), **self.meta})
+        path = self.path / RESULT_FILE
+        pq.write_table(table, path.with_suffix(".tmp"))
+        os.replace(path.with_suffix(".tmp"), path)
+        return path
+
+    def close(self) -> None:
+        fcntl.flock(self._lock, fcntl.LOCK_UN)
+        self._lock.close()
+
+
+def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Path | None = None,
+              progress: Progress | None = None):
+    """Run every case of `spec` on `scene` and return the table (a pandas DataFrame)."""
+    import pandas as pd
+    workers = workers or os.cpu_count() or 1
+    if workers < 1:
+        raise SceneError("--workers", f"expected at least 1 worker, got {workers}")
+    cases = spec.cases()
+    spec.check(scene, cases)
+    folder = OutputFolder(out, scene, spec) if out is not None else None
+    try:
+        rows = folder.done() if folder else {}
+        if progress and rows:
+            progress(len(rows))
+        todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in rows]
+        for chunk_rows in _execute(scene, todo, workers):
+            for row in chunk_rows:
+                rows[row["case"]] = row
+            if folder:
+                folder.write_part(chunk_rows)
+            if progress:
+                progress(len(chunk_rows))
+        frame = pd.DataFrame([rows[i] for i in sorted(rows)])
+        if folder:
+            folder.write_result(frame)
+        return frame
+    finally:
+        if folder:
+            folder.close()
+
+
+def _execute(scene: Scene, todo: list[tuple[int, dict[str, Any]]], workers: int) -> Iterable[list[dict[str, Any]]]:
+    """Chunks of rows as they finish: in this process for one worker, else on a process pool."""
+    if not todo:
+        return
+    raw = scene.to_dict()
+    if workers == 1:
+        for chunk in chunked(todo, 1):
+            yield _run_chunk(raw, chunk)
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        pending = {pool.submit(_run_chunk, raw, chunk) for chunk in chunked(todo, workers)}
+        try:
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    yield future.result()
+        finally:
+            for future in pending:
+                future.cancel()

@@ -1,0 +1,168 @@
+"""A sweep specification: which scene keys vary, and how (a list, a grid or a distribution).
+
+    KEY=[a,b,...]            the listed values
+    KEY=linspace(a,b,n)      n values evenly spaced from a to b
+    KEY=logspace(a,b,n)      n values from 10^a to 10^b, evenly spaced in the exponent
+    KEY=uniform(a,b)         random draws (with --random N), uniform on [a, b)
+    KEY=normal(mu,sigma)     normal draws
+    KEY=lognormal(mu,sigma)  exp of normal(mu, sigma) draws
+
+KEY is any scene key, an element counted from 1 (`initial.u[2]` is omega20). Several keys
+make a full grid; with `random` the cases are drawn instead, each key from its distribution
+(a list or grid key then draws uniformly from its values). Every error names the key.
+"""
+from __future__ import annotations
+
+import itertools
+import re
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..errors import SceneError
+from ..scene import SCHEMA, Scene, parse_override, split_key
+
+GRIDS = ("linspace", "logspace")
+DISTRIBUTIONS = ("uniform", "normal", "lognormal")
+CALL = re.compile(r"^\s*(?P<name>[a-z]+)\s*\((?P<args>[^()]*)\)\s*$")
+MAX_CASES = 10_000_000  # a sweep larger than this is a typo, not a study
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One varied key: its values (list or grid) or its distribution (name, parameters)."""
+
+    key: str
+    values: tuple[Any, ...] = ()
+    distribution: str = ""
+    parameters: tuple[float, ...] = ()
+
+    def describe(self) -> str:
+        if self.distribution:
+            return f"{self.key}={self.distribution}({', '.join(f'{p:g}' for p in self.parameters)})"
+        return f"{self.key}={list(self.values)}"
+
+    def draw(self, rng: np.random.Generator, count: int) -> list[Any]:
+        if self.distribution == "uniform":
+            lo, hi = self.parameters
+            return rng.uniform(lo, hi, count).tolist()
+        if self.distribution == "normal":
+            return rng.normal(*self.parameters, count).tolist()
+        if self.distribution == "lognormal":
+            return rng.lognormal(*self.parameters, count).tolist()
+        return [self.values[i] for i in rng.integers(0, len(self.values), count)]
+
+
+def parse_axis(text: str) -> Axis:
+    """One `KEY=SPEC` of `--vary`."""
+    if "=" not in text:
+        raise SceneError("--vary", f"expected KEY=SPEC, got {text!r}")
+    key, spec = (part.strip() for part in text.split("=", 1))
+    split_key(key)  # an unknown key or a bad index ends here, named
+    call = CALL.match(spec)
+    if call is None:
+        _, value = parse_override(f"{key}={spec}")
+        if not isinstance(value, list) or not value:
+            raise SceneError(key, f"expected a list [a, b, ...], a grid linspace(a,b,n) | logspace(a,b,n) "
+                                  f"or a distribution {' | '.join(d + '(...)' for d in DISTRIBUTIONS)}, got {spec!r}")
+        return Axis(key, tuple(value))
+    name, args = call["name"], call["args"]
+    try:
+        numbers = [float(a) for a in args.split(",")]
+    except ValueError:
+        raise SceneError(key, f"{name}(...) takes numbers, got {args!r}") from None
+    if not all(np.isfinite(numbers)):
+        raise SceneError(key, f"{name}(...) takes finite numbers, got {args!r}")
+    if name in GRIDS:
+        if len(numbers) != 3 or not float(numbers[2]).is_integer():
+            raise SceneError(key, f"{name}(a,b,n) takes two numbers and a whole count, got {spec!r}")
+        count = int(numbers[2])
+        if count < 1:
+            raise SceneError(key, f"{name}(a,b,n) needs a count n of at least 1, got {count}")
+        grid = np.linspace if name == "linspace" else np.logspace
+        return Axis(key, tuple(grid(numbers[0], numbers[1], count).tolist()))
+    if name in DISTRIBUTIONS:
+        if len(numbers) != 2:
+            raise SceneError(key, f"{name}(a,b) takes two numbers, got {spec!r}")
+        if name == "uniform" and not numbers[0] < numbers[1]:
+            raise SceneError(key, f"uniform(a,b) needs a < b, got {spec!r}")
+        if name != "uniform" and numbers[1] < 0:
+            raise SceneError(key, f"{name}(mu,sigma) needs sigma >= 0, got {spec!r}")
+        return Axis(key, distribution=name, parameters=tuple(numbers))
+    raise SceneError(key, f"unknown range {name!r}: use linspace, logspace, "
+                          f"{', '.join(DISTRIBUTIONS)} or a list [a, b, ...]")
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """The varied keys and how the cases are made from them."""
+
+    axes: tuple[Axis, ...]
+    random: int = 0  # 0: the full grid; N: N random draws
+    seed: int = 0
+
+    @classmethod
+    def from_vary(cls, vary: Mapping[str, Any] | list[str], random: int = 0, seed: int = 0) -> "SweepSpec":
+        """From `--vary` strings, or a mapping KEY -> SPEC (a string, or a list of values)."""
+        items = vary.items() if isinstance(vary, Mapping) else [(None, v) for v in vary]
+        axes = []
+        for key, spec in items:
+            if key is None:
+                axes.append(parse_axis(spec))
+            elif isinstance(spec, str):
+                axes.append(parse_axis(f"{key}={spec}"))
+            else:
+                values = np.asarray(spec).tolist() if hasattr(spec, "tolist") else list(spec)
+                if not values:
+                    raise SceneError(key, "no values to vary over")
+                split_key(key)
+                axes.append(Axis(key, tuple(values)))
+        if not axes:
+            raise SceneError("--vary", "give at least one KEY=SPEC to vary")
+        keys = [a.key for a in axes]
+        if len(set(keys)) != len(keys):
+            raise SceneError(next(k for k in keys if keys.count(k) > 1), "is varied twice")
+        if isinstance(random, bool) or not isinstance(random, (int, np.integer)) or random < 0:
+            raise SceneError("--random", f"expected a number of cases >= 1, got {random!r}")
+        if not random and any(a.distribution for a in axes):
+            key = next(a.key for a in axes if a.distribution)
+            raise SceneError(key, "a distribution needs --random N (how many cases to draw)")
+        spec = cls(tuple(axes), int(random), int(seed))
+        if spec.count() > MAX_CASES:
+            raise SceneError("--vary", f"{spec.count()} cases, more than {MAX_CASES}")
+        return spec
+
+    def count(self) -> int:
+        return self.random or int(np.prod([len(a.values) for a in self.axes]))
+
+    def cases(self) -> list[dict[str, Any]]:
+        """Every case as overrides {KEY: value}, in a fixed order (case i is row i)."""
+        if self.random:
+            rng = np.random.default_rng(self.seed)
+            columns = [a.draw(rng, self.random) for a in self.axes]
+            return [dict(zip((a.key for a in self.axes), row)) for row in zip(*columns)]
+        keys = [a.key for a in self.axes]
+        return [dict(zip(keys, row)) for row in itertools.product(*(a.values for a in self.axes))]
+
+    def check(self, scene: Scene, cases: list[dict[str, Any]]) -> None:
+        """Refuse, naming the key, an index out of range for `scene` and any value that no
+        scene could take (a negative mass, a drawn Poisson ratio of 0.7). Values that are
+        bad only together (a yield strength above the modulus) become rows instead."""
+        for axis in self.axes:
+            section, key, _ = split_key(axis.key)
+            rule = SCHEMA[section][key]
+            scene.replace({axis.key: cases[0][axis.key]} if cases else {})  # the index fits
+            values = {id(c): c[axis.key] for c in cases}.values() if self.random else axis.values
+            for value in values:
+                if rule.kind in ("float", "floats", "list", "int") and not isinstance(value, bool) \
+                        and isinstance(value, (int, float)):
+                    reason = rule.check(value) if rule.check else None
+                    if reason or not np.isfinite(value):
+                        raise SceneError(axis.key, f"{reason or 'must be finite'}, got {value!r}"
+                                                   + (" (drawn from the distribution: narrow it or "
+                                                      "choose another)" if axis.distribution else ""))
+
+    def describe(self) -> str:
+        text = " ".join(f"--vary {a.describe()}" for a in self.axes)
+        return text + (f" --random {self.random} --seed {self.seed}" if self.random else "")
