@@ -133,6 +133,15 @@ class SimulationResult:
         Where the result leaves the model's range of validity.
     stats : dict
         Integrator counters and the wall time.
+
+    Examples
+    --------
+    >>> import impactgen
+    >>> result = impactgen.simulate(impactgen.load_scene("bouncing"))
+    >>> result.summary["impacts"] > 100, result.first_impact["t_contact"] < 1e-3
+    (True, True)
+    >>> result.impacts_frame()[["t_start", "delta_max", "delta_r"]].shape[1]
+    3
     """
 
     scene: Scene
