@@ -166,10 +166,17 @@ def test_indexed_keys_count_from_one_like_the_links():
     scene = impactgen.load_scene(PAPER, overrides={"initial.u[2]": -0.3, "chain.length[1]": 1.5})
     assert scene.u0 == (-0.1, -0.3) and scene.chain.length == (1.5, 1.0)
     for key, words in (("initial.u[3]", "out of range"), ("initial.u[0]", "numbered from 1"),
-                       ("chain.gravity[1]", "not a list"), ("initial.q[1]", "initial.q_deg[1]")):
+                       ("chain.gravity[1]", "not a list"), ("chain.length[x]", "whole number")):
         with pytest.raises(SceneError, match=words.replace("[", r"\[").replace("]", r"\]")) as err:
             impactgen.load_scene(PAPER, overrides={key: 1.0})
         assert err.value.key == key
+
+
+def test_an_angle_element_may_be_given_in_either_unit(paper_scene):
+    in_radians = impactgen.load_scene(PAPER, overrides={"initial.q[2]": -1.0})
+    assert in_radians.q0 == pytest.approx((math.radians(-70.0), -1.0))
+    from_radians = paper_scene.replace({"initial.q_deg[2]": -55.0})  # to_dict states radians
+    assert from_radians.q0 == pytest.approx((math.radians(-70.0), math.radians(-55.0)))
 
 
 def test_scene_round_trips_through_toml(paper_scene):

@@ -119,3 +119,146 @@ def test_out_folder_keeps_the_scene_resumes_and_is_not_shared(tmp_path):
             OutputFolder(tmp_path, scene, SweepSpec.from_vary(vary))
     finally:
         holder.close()
+
+
+# ----------------------------------------------------------------------------- execution
+
+import json  # noqa: E402
+import os  # noqa: E402
+import signal  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+CLI = [sys.executable, "-m", "impactgen.cli"]
+GRID = {"initial.u[2]": "linspace(-0.5,-0.1,6)", "contact.friction": [0.0, 0.3]}
+
+
+def _comparable(frame):
+    return frame.drop(columns=["wall_s"]).reset_index(drop=True)
+
+
+@pytest.fixture(scope="module")
+def pool_table():
+    return impactgen.sweep("paper", vary=GRID, workers=2)
+
+
+def _start(args: list[str], log: Path) -> subprocess.Popen:
+    return subprocess.Popen(args, stdout=log.open("w"), stderr=subprocess.STDOUT, start_new_session=True)
+
+
+@pytest.mark.slow
+def test_local_cluster_gives_the_pool_s_table(pool_table):
+    pytest.importorskip("distributed")
+    on_cluster = impactgen.sweep("paper", vary=GRID, scheduler="local", workers=2)
+    assert _comparable(on_cluster).equals(_comparable(pool_table))
+
+
+@pytest.mark.slow
+def test_separately_started_scheduler_and_workers_give_the_pool_s_table(pool_table, tmp_path):
+    pytest.importorskip("distributed")
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    address_file = tmp_path / "scheduler.json"
+    processes = [_start(dask + ["--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                "--scheduler-file", str(address_file)], tmp_path / "scheduler.log")]
+    try:
+        for _ in range(300):
+            if address_file.exists() and address_file.stat().st_size:
+                break
+            time.sleep(0.1)
+        worker = [sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(address_file),
+                  "--nthreads", "1", "--no-dashboard"]
+        processes += [_start(worker, tmp_path / f"worker{k}.log") for k in range(2)]
+        address = json.loads(address_file.read_text())["address"]
+        from distributed import Client
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=60)
+        table = impactgen.sweep("paper", vary=GRID, scheduler=address)
+        assert _comparable(table).equals(_comparable(pool_table))
+    finally:
+        for process in processes:
+            os.killpg(process.pid, signal.SIGTERM)
+        for process in processes:
+            process.wait(timeout=30)
+
+
+def _children(pid: int) -> list[int]:
+    found = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        text = (task / "children").read_text().split()
+        found += [int(c) for c in text]
+    return found
+
+
+def _wait_for_parts(out: Path, at_least: int, process: subprocess.Popen) -> None:
+    for _ in range(600):
+        if len(list((out / "parts").glob("part-*.parquet"))) >= at_least or process.poll() is not None:
+            return
+        time.sleep(0.05)
+
+
+SLOW_CASES = ["--set", "solver.t_end=0.1", "--set", "solver.rtol=1e-8", "--vary",
+              "initial.u[2]=linspace(-0.5,-0.1,160)", "--quiet"]
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
+    out = tmp_path / "killed"
+    process = subprocess.Popen(CLI + ["sweep", "paper", *SLOW_CASES, "--workers", "2", "--out", str(out)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _wait_for_parts(out, 1, process)
+    workers = _children(process.pid)
+    assert process.poll() is None and workers, "the sweep ended before a worker could be killed"
+    os.kill(workers[0], signal.SIGKILL)
+    stdout, stderr = process.communicate(timeout=600)
+    assert process.returncode == 0, stderr
+    assert "a worker process died" in stderr  # the pool broke, and its chunks ran again
+    import pandas as pd
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert sorted(table["case"]) == list(range(160))  # every case once: none lost, none twice
+    assert set(table["status"]) == {"ok"}
+
+
+@pytest.mark.slow
+def test_sigterm_keeps_the_finished_rows_and_a_resume_computes_only_the_rest(tmp_path):
+    out = tmp_path / "stopped"
+    args = CLI + ["sweep", "paper", *SLOW_CASES, "--workers", "1", "--out", str(out)]
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _wait_for_parts(out, 2, process)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=300)
+    assert process.returncode == 130, stderr
+    assert "run the same command to resume" in stderr
+    first_parts = {p.name: p.read_bytes() for p in (out / "parts").glob("part-*.parquet")}
+    done = sum(len(pq_rows(p)) for p in (out / "parts").glob("part-*.parquet"))
+    assert 0 < done < 160
+    resumed = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"resuming: {done} of 160 cases were done" in resumed.stderr
+    assert all((out / "parts" / name).read_bytes() == data for name, data in first_parts.items())
+    import pandas as pd
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert sorted(table["case"]) == list(range(160))
+    new_rows = sum(len(pq_rows(p)) for p in (out / "parts").glob("part-*.parquet") if p.name not in first_parts)
+    assert new_rows == 160 - done  # the finished cases were not computed again
+
+
+def pq_rows(path: Path) -> list:
+    import pyarrow.parquet as pq
+    return pq.read_table(path, columns=["case"]).to_pylist()
+
+
+def test_plot_and_trajectories_draw_the_paper_figures(tmp_path):
+    pytest.importorskip("matplotlib")
+    res = subprocess.run(CLI + ["sweep", "paper", "--vary", "initial.u[2]=[-0.2,-0.3,-0.4,-0.5]",
+                                "--trajectories", "4", "--plot", "--out", str(tmp_path), "--quiet"],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert len(list((tmp_path / "trajectories").glob("case-*.parquet"))) == 4
+    for name in ("kinetic_energy.png", "delta_T_vs_delta_r.png", "delta_r_vs_initial_u2.png"):
+        assert (tmp_path / "figures" / name).exists(), name
+    drawn = impactgen.sweep("paper", vary={"initial.u[2]": "uniform(-0.5,-0.1)"}, random=30, workers=1,
+                            out=tmp_path / "random")
+    from impactgen.sweep.figures import plot_sweep
+    paths = plot_sweep(drawn, SweepSpec.from_vary({"initial.u[2]": "uniform(-0.5,-0.1)"}, random=30),
+                       tmp_path / "random")
+    assert {p.name for p in paths} >= {"histograms.png", "scatter_delta_r.png"}

@@ -82,7 +82,14 @@ def _parser() -> argparse.ArgumentParser:
     sw.add_argument("--seed", type=int, default=0, help="seed of the random draws (default 0)")
     sw.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     sw.add_argument("--workers", type=int, default=None, metavar="K",
-                    help="processes of the local pool (default: all cores)")
+                    help="processes of the local pool, or of --scheduler local (default: all cores)")
+    sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="run on a Dask cluster: tcp://HOST:PORT of its scheduler, or 'local' "
+                         "for a LocalCluster started here")
+    sw.add_argument("--trajectories", type=int, default=0, metavar="K",
+                    help="keep the samples of K evenly chosen cases (needs --out), for T(t) figures")
+    sw.add_argument("--plot", action="store_true", help="draw the figures the varied keys call for "
+                    "into OUT/figures (needs --out)")
     sw.add_argument("--out", type=Path, default=None, help="folder for sweep.parquet; the same command "
                     "resumes an interrupted sweep there")
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -260,21 +267,36 @@ def _sweep(args: argparse.Namespace) -> int:
     from .sweep import SweepSpec, run_sweep
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
     spec = SweepSpec.from_vary(args.vary, random=args.random, seed=args.seed)
+    if args.plot and args.out is None:
+        raise SceneError("--plot", "the figures go into the --out folder: give one")
     # SIGTERM ends the sweep as Ctrl-C does: the finished parts are already on disk
-    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     bars = []  # the progress bar starts with the first finished cases, after every check
+    done = [0]
 
     def progress(count: int) -> None:
-        if not bars:
+        if not bars and not args.quiet:
             from tqdm import tqdm
             bars.append(tqdm(total=spec.count(), unit="case", file=sys.stderr, smoothing=0.1))
-        bars[0].update(count)
+        done[0] += count
+        if bars:
+            bars[0].update(count)
+
+    def resumed(count: int) -> None:
+        print(f"impactgen: resuming: {count} of {spec.count()} cases were done in {args.out}; "
+              f"computing the other {spec.count() - count}", file=sys.stderr)
     try:
-        frame = run_sweep(scene, spec, workers=args.workers, out=args.out,
-                          progress=None if args.quiet else progress)
-    finally:
+        frame = run_sweep(scene, spec, workers=args.workers, out=args.out, progress=progress,
+                          scheduler=args.scheduler, trajectories=args.trajectories, on_resume=resumed)
+    except KeyboardInterrupt:
         for bar in bars:
             bar.close()
+        kept = f"; the {done[0]} finished cases are kept in {args.out}: run the same command to resume" \
+            if args.out is not None else ""
+        print(f"impactgen: interrupted after {done[0]} of {spec.count()} cases{kept}", file=sys.stderr)
+        return 130
+    for bar in bars:
+        bar.close()
     counts = frame["status"].value_counts().to_dict()
     print(f"{len(frame)} cases: " + ", ".join(f"{n} {status}" for status, n in sorted(counts.items())))
     if args.out is not None:
@@ -283,6 +305,10 @@ def _sweep(args: argparse.Namespace) -> int:
         shown = [c for c in frame.columns if c in ("case", *(a.key for a in spec.axes), "status",
                                                    "delta_max", "delta_r", "P_max", "delta_T", "t_contact")]
         print(frame[shown].to_string(index=False, max_rows=40))
+    if args.plot:
+        from .sweep.figures import plot_sweep
+        for path in plot_sweep(frame, spec, args.out):
+            print(path)
     return 0
 
 

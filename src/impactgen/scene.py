@@ -386,9 +386,10 @@ def _with_element(dotted: str, target: dict[str, Any], section: str, key: str, i
     """The list of `section.key` with element `index` (from 1) set to `value`."""
     current = target.get(key)
     if current is None and section == "initial" and key in ("q", "q_deg"):
-        other = "q_deg" if key == "q" else "q"
-        raise SceneError(dotted, f"the scene gives initial.{other}, not initial.{key}: "
-                                 f"set initial.{other}[{index}] instead")
+        other = target.get("q_deg" if key == "q" else "q")  # the angles in the other unit
+        if isinstance(other, list) and all(isinstance(v, (int, float)) for v in other):
+            convert = math.radians if key == "q" else math.degrees
+            current = [convert(v) for v in other]
     if current is None:
         raise SceneError(dotted, f"the scene does not set {section}.{key}, so it has no element {index}")
     if not isinstance(current, list):  # one number for every link (chain.length, chain.mass)

@@ -6,7 +6,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 from ..scene import Scene, load_scene
 from .run import run_sweep
@@ -14,7 +14,8 @@ from .spec import SweepSpec
 
 
 def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random: int = 0, seed: int = 0,
-          workers: int | None = None, out: str | Path | None = None, progress=None):
+          workers: int | None = None, out: str | Path | None = None, progress=None,
+          scheduler: str | None = None, trajectories: int | Iterable[int] = 0):
     """Run `scene` once per case of a sweep and return the table of results.
 
     Parameters
@@ -32,12 +33,19 @@ def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random
     seed : int, default 0
         Seed of the random draws.
     workers : int, optional
-        Processes of the local pool (default: all cores; 1 runs in this process).
+        Processes of the local pool (default: all cores; 1 runs in this process), or of the
+        LocalCluster with ``scheduler="local"``.
+    scheduler : str, optional
+        Run on a Dask distributed cluster: its scheduler's address ("tcp://HOST:PORT"), or
+        "local" to start a LocalCluster here.
     out : str or Path, optional
         Folder for the result: sweep.parquet (scene and specification in its metadata) and
         the parts written as chunks finish; the same call resumes an interrupted sweep.
     progress : callable, optional
         Called with the number of cases each time some finish.
+    trajectories : int or iterable of int, default 0
+        Keep the samples of this many evenly chosen cases (or of these case numbers) in
+        ``out/trajectories/case-N.parquet``, for figures of T(t) per case.
 
     Returns
     -------
@@ -56,7 +64,7 @@ def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random
         scene = load_scene(scene)
     spec = SweepSpec.from_vary(vary, random=random, seed=seed)
     return run_sweep(scene, spec, workers=workers, out=Path(out) if out is not None else None,
-                     progress=progress)
+                     progress=progress, scheduler=scheduler, trajectories=trajectories)
 
 
 __all__ = ["SweepSpec", "run_sweep", "sweep"]

@@ -11,23 +11,32 @@ import fcntl
 import json
 import os
 import time
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+import numpy as np
+
 from ..errors import ImpactgenError, SceneError
 from ..scene import Scene, scene_from_dict
+from . import execute
 from .spec import SweepSpec
 
-CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep overhead small
-MAX_CHUNK = 500  # cases; a lost chunk (a dead worker) costs at most this much work again
+TRAJECTORY = "_trajectory"  # a row's key for the columns of a kept trajectory (not a column)
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
 RESULT_FILE = "sweep.parquet"
 
 Progress = Callable[[int], None]  # called with the number of cases just finished
 
 
-def case_row(base: Scene, index: int, overrides: dict[str, Any]) -> dict[str, Any]:
+@dataclass(frozen=True)
+class CaseOptions:
+    """What every case of a sweep shares besides its scene."""
+
+    keep_trajectories: frozenset[int] = frozenset()  # case indices whose samples are kept
+
+
+def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
     """One case: its varied inputs, every scalar summary field, status, message, warnings, time."""
     import impactgen
     started = time.perf_counter()
@@ -46,6 +55,9 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any]) -> dict[str, An
     row.update(flat_summary(result.summary))
     row.update(status=result.status, message=result.message, warnings=" | ".join(result.warnings),
                wall_s=time.perf_counter() - started)
+    if keep_trajectory:
+        from ..export import trajectory_columns
+        row[TRAJECTORY] = {k: v for k, (v, _) in trajectory_columns(result).items()}
     return row
 
 
@@ -64,14 +76,17 @@ def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
-def _run_chunk(scene_dict: dict[str, Any], cases: list[tuple[int, dict[str, Any]]]) -> list[dict[str, Any]]:
+def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> list[dict[str, Any]]:
+    """The rows of some cases of one scene (what a worker process or Dask task runs)."""
     base = scene_from_dict(scene_dict)
-    return [case_row(base, index, overrides) for index, overrides in cases]
+    return [case_row(base, index, overrides, index in options.keep_trajectories) for index, overrides in cases]
 
 
-def chunked(cases: list[tuple[int, dict[str, Any]]], workers: int) -> list[list[tuple[int, dict[str, Any]]]]:
-    size = max(1, min(MAX_CHUNK, -(-len(cases) // (workers * CHUNKS_PER_WORKER))))
-    return [cases[i:i + size] for i in range(0, len(cases), size)]
+def evenly_chosen(count: int, total: int) -> frozenset[int]:
+    """`count` case indices spread evenly over `total` cases, first and last included."""
+    if count <= 0 or total == 0:
+        return frozenset()
+    return frozenset(int(i) for i in np.unique(np.linspace(0, total - 1, min(count, total)).round()))
 
 
 def structure_order(spec: SweepSpec, cases: list[dict[str, Any]]) -> list[int]:
@@ -132,6 +147,16 @@ class OutputFolder:
         pq.write_table(pa.Table.from_pylist(rows), temporary)
         os.replace(temporary, final)  # a part is on disk whole or not at all
 
+    def write_trajectory(self, case: int, columns: dict[str, np.ndarray]) -> None:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        folder = self.path / "trajectories"
+        folder.mkdir(exist_ok=True)
+        table = pa.table({k: (v.tolist() if v.dtype.kind in "US" else v) for k, v in columns.items()})
+        path = folder / f"case-{case}.parquet"
+        pq.write_table(table, path.with_suffix(".tmp"))
+        os.replace(path.with_suffix(".tmp"), path)
+
     def write_result(self, frame) -> Path:
         import pyarrow as pa
         import pyarrow.parquet as pq
@@ -148,22 +173,40 @@ class OutputFolder:
 
 
 def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Path | None = None,
-              progress: Progress | None = None):
-    """Run every case of `spec` on `scene` and return the table (a pandas DataFrame)."""
+              progress: Progress | None = None, scheduler: str | None = None,
+              trajectories: int | Iterable[int] = 0, on_resume: Callable[[int], None] | None = None):
+    """Run every case of `spec` on `scene` and return the table (a pandas DataFrame).
+
+    `scheduler` runs the chunks on a Dask cluster (an address, or "local"); otherwise a local
+    pool of `workers` processes (default: every core) runs them. `trajectories` keeps the
+    samples of that many evenly chosen cases (or of the listed case numbers) in
+    `out/trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
+    into `out` had finished (they are not run again).
+    """
     import pandas as pd
-    workers = workers or os.cpu_count() or 1
-    if workers < 1:
-        raise SceneError("--workers", f"expected at least 1 worker, got {workers}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise SceneError("--workers", f"expected a number of worker processes >= 1, got {workers!r}")
+    if scheduler not in (None, "local") and workers is not None:
+        raise SceneError("--workers", "a Dask cluster at an address has its own workers: give --workers "
+                                      "only with no --scheduler or --scheduler local")
     cases = spec.cases()
     spec.check(scene, cases)
+    keep = _kept_cases(trajectories, len(cases))
+    if keep and out is None:
+        raise SceneError("--trajectories", "kept trajectories are written into the --out folder: give one")
     folder = OutputFolder(out, scene, spec) if out is not None else None
     try:
         rows = folder.done() if folder else {}
+        if rows and on_resume:
+            on_resume(len(rows))
         if progress and rows:
             progress(len(rows))
         todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in rows]
-        for chunk_rows in _execute(scene, todo, workers):
+        for chunk_rows in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
             for row in chunk_rows:
+                kept = row.pop(TRAJECTORY, None)
+                if kept is not None and folder:
+                    folder.write_trajectory(row["case"], kept)
                 rows[row["case"]] = row
             if folder:
                 folder.write_part(chunk_rows)
@@ -178,22 +221,26 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
             folder.close()
 
 
-def _execute(scene: Scene, todo: list[tuple[int, dict[str, Any]]], workers: int) -> Iterable[list[dict[str, Any]]]:
-    """Chunks of rows as they finish: in this process for one worker, else on a process pool."""
+def _kept_cases(trajectories: int | Iterable[int], total: int) -> frozenset[int]:
+    if isinstance(trajectories, (int, np.integer)) and not isinstance(trajectories, bool):
+        if trajectories < 0:
+            raise SceneError("--trajectories", f"expected a number of cases >= 0, got {trajectories}")
+        return evenly_chosen(int(trajectories), total)
+    chosen = frozenset(int(i) for i in trajectories)
+    bad = sorted(i for i in chosen if not 0 <= i < total)
+    if bad:
+        raise SceneError("--trajectories", f"case {bad[0]} does not exist: the cases are 0 to {total - 1}")
+    return chosen
+
+
+def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: int | None,
+             scheduler: str | None) -> Iterable[list[dict[str, Any]]]:
     if not todo:
-        return
-    raw = scene.to_dict()
+        return iter(())
+    payload = scene.to_dict()
+    if scheduler is not None:
+        return execute.dask_cluster(run_chunk, payload, options, todo, scheduler, workers)
+    workers = workers or os.cpu_count() or 1
     if workers == 1:
-        for chunk in chunked(todo, 1):
-            yield _run_chunk(raw, chunk)
-        return
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        pending = {pool.submit(_run_chunk, raw, chunk) for chunk in chunked(todo, workers)}
-        try:
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    yield future.result()
-        finally:
-            for future in pending:
-                future.cancel()
+        return execute.in_process(run_chunk, payload, options, todo)
+    return execute.process_pool(run_chunk, payload, options, todo, workers)

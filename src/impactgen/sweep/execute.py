@@ -1,0 +1,113 @@
+"""Where the chunks of a sweep run: this process, a local process pool, or a Dask cluster.
+
+Every backend yields the rows of each chunk as it finishes, so the caller writes them at
+once. A chunk whose worker dies is run again: the process pool is restarted with the chunks
+it had not returned (at most MAX_CHUNK_TRIES times each), and Dask reschedules the tasks of a
+lost worker itself (its `distributed.scheduler.allowed-failures`). A chunk that keeps killing
+its workers ends as rows with status "failed", so no case is ever missing from the table.
+"""
+from __future__ import annotations
+
+import sys
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from typing import Any, Callable, Iterator
+
+from ..errors import SceneError
+
+CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep overhead small
+MAX_CHUNK = 500  # cases; a lost chunk (a dead worker) costs at most this much work again
+MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
+
+Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)
+RunChunk = Callable[[dict[str, Any], Chunk, Any], list[dict[str, Any]]]
+
+
+def chunked(cases: Chunk, workers: int) -> list[Chunk]:
+    size = max(1, min(MAX_CHUNK, -(-len(cases) // (workers * CHUNKS_PER_WORKER))))
+    return [cases[i:i + size] for i in range(0, len(cases), size)]
+
+
+def lost_rows(chunk: Chunk, reason: str) -> list[dict[str, Any]]:
+    """Rows for the cases of a chunk that could not be run: nothing is silently missing."""
+    return [{"case": i, **overrides, "status": "failed", "message": reason, "warnings": "", "wall_s": 0.0}
+            for i, overrides in chunk]
+
+
+def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk) -> Iterator[list[dict]]:
+    for chunk in chunked(todo, 1):
+        yield run_chunk(payload, chunk, options)
+
+
+def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
+                 workers: int) -> Iterator[list[dict]]:
+    """A local pool of `workers` processes; a pool broken by a dead worker is started again
+    with the chunks it had not returned."""
+    queue = [(chunk, 0) for chunk in chunked(todo, workers)]
+    while queue:
+        retry: list[tuple[Chunk, int]] = []
+        pool = ProcessPoolExecutor(max_workers=workers)
+        try:
+            pending = {pool.submit(run_chunk, payload, chunk, options): (chunk, tries) for chunk, tries in queue}
+            while pending:
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    chunk, tries = pending.pop(future)
+                    try:
+                        rows = future.result()
+                    except BrokenProcessPool:
+                        retry.append((chunk, tries + 1))
+                        continue
+                    yield rows
+        except BrokenProcessPool:  # raised by submit once a worker has died
+            retry += list(pending.values())
+        finally:
+            for future in list(pending):
+                future.cancel()
+            pool.shutdown(wait=True, cancel_futures=True)
+        queue = []
+        if retry:
+            print(f"impactgen: a worker process died; running its {len(retry)} unfinished chunks "
+                  "again on a new pool", file=sys.stderr)
+        for chunk, tries in retry:
+            if tries >= MAX_CHUNK_TRIES:
+                yield lost_rows(chunk, f"its worker process died {tries} times (out of memory, or killed)")
+            else:
+                queue.append((chunk, tries))
+
+
+def dask_cluster(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
+                 scheduler: str, workers: int | None) -> Iterator[list[dict]]:
+    """The chunks as tasks on a Dask distributed cluster: `scheduler` is its address
+    (tcp://HOST:PORT), or "local" for a LocalCluster of `workers` processes started here."""
+    try:
+        from distributed import Client, LocalCluster, as_completed
+        from distributed.scheduler import KilledWorker
+    except ImportError:
+        raise SceneError("--scheduler", "Dask needs the distributed package: pip install 'impactgen[sweep]'") from None
+    cluster = None
+    try:
+        if scheduler == "local":
+            cluster = LocalCluster(n_workers=workers or None, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        else:
+            client = Client(scheduler, timeout="20s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SceneError("--scheduler", f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
+    try:
+        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        chunks = chunked(todo, n_workers)
+        futures = {client.submit(run_chunk, payload, chunk, options, pure=False): chunk for chunk in chunks}
+        try:
+            for future in as_completed(futures):
+                try:
+                    yield future.result()
+                except KilledWorker:
+                    yield lost_rows(futures[future], "the Dask workers running it died repeatedly")
+        finally:
+            client.cancel(list(futures))
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

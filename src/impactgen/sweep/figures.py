@@ -1,0 +1,140 @@
+"""Figures of a sweep, chosen by what it varied (the paper's Figures 9 to 12 among them).
+
+- kept trajectories: the kinetic energy T(t) of each case through its first impact (Figs. 9, 11);
+- Delta T against delta_r over the cases (Fig. 10a);
+- one or two varied keys (a grid): the summary fields against the first key's values, one
+  line per value of the second (delta_r against |omega20| is Fig. 10b, against q20 Fig. 12);
+  an angular speed whose values are all <= 0 is drawn against its magnitude, as the paper does;
+- random draws: histograms of the summary fields and scatter plots against each key.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .spec import SweepSpec
+
+FIELDS = {"delta_r": ("permanent deformation delta_r", "m"), "delta_max": ("maximum deformation delta_m", "m"),
+          "P_max": ("maximum force P_m", "N"), "delta_T": ("kinetic energy lost Delta T", "J"),
+          "t_contact": ("impact duration", "s")}
+
+
+def plot_sweep(frame, spec: SweepSpec, out: Path) -> list[Path]:
+    """Write the figures of a sweep's table (and its kept trajectories) into out/figures."""
+    from ..plots import _pyplot
+    plt = _pyplot()
+    folder = out / "figures"
+    folder.mkdir(parents=True, exist_ok=True)
+    ok = frame[frame["status"] == "ok"]
+    paths: list[Path] = []
+    if (out / "trajectories").is_dir():
+        paths += _kinetic_energy(plt, ok, spec, out / "trajectories", folder)
+    if len(ok) and {"delta_T", "delta_r"} <= set(ok.columns):
+        fig, ax = plt.subplots(figsize=(6, 4))
+        order = np.argsort(ok["delta_r"].to_numpy())
+        ax.plot(ok["delta_r"].to_numpy()[order], ok["delta_T"].to_numpy()[order],
+                "o-" if not spec.random else "o", ms=4, lw=1)
+        ax.set_xlabel("delta_r (m)")
+        ax.set_ylabel("Delta T (J)")
+        ax.set_title("kinetic energy lost against permanent deformation (Fig. 10a)")
+        ax.grid(alpha=0.3)
+        paths.append(_save(plt, fig, folder / "delta_T_vs_delta_r.png"))
+    if spec.random:
+        paths += _random_figures(plt, ok, spec, folder)
+    else:
+        paths += _grid_figures(plt, ok, spec, folder)
+    return paths
+
+
+def _save(plt, fig, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _axis_values(frame, key: str) -> tuple[np.ndarray, str]:
+    values = frame[key].to_numpy(dtype=float)
+    if key.startswith("initial.u") and len(values) and np.all(values <= 0):
+        return np.abs(values), f"|{key}|"
+    return values, key
+
+
+def _grid_figures(plt, ok, spec: SweepSpec, folder: Path) -> list[Path]:
+    if not len(ok) or len(spec.axes) > 2:
+        return []
+    first = spec.axes[0].key
+    groups = [(None, ok)] if len(spec.axes) == 1 else list(ok.groupby(spec.axes[1].key))
+    paths = []
+    for field, (title, unit) in FIELDS.items():
+        if field not in ok.columns:
+            continue
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for value, part in groups:
+            x, label = _axis_values(part, first)
+            order = np.argsort(x)
+            ax.plot(x[order], part[field].to_numpy()[order], "o-", ms=4, lw=1,
+                    label=None if value is None else f"{spec.axes[1].key} = {value:g}")
+        ax.set_xlabel(label)
+        ax.set_ylabel(f"{field} ({unit})")
+        ax.set_title(f"{title} against {label}")
+        ax.grid(alpha=0.3)
+        if len(groups) > 1:
+            ax.legend(fontsize=8)
+        paths.append(_save(plt, fig, folder / f"{field}_vs_{_filename(first)}.png"))
+    return paths
+
+
+def _random_figures(plt, ok, spec: SweepSpec, folder: Path) -> list[Path]:
+    if not len(ok):
+        return []
+    fields = [f for f in FIELDS if f in ok.columns]
+    fig, axes = plt.subplots(1, len(fields), figsize=(3.2 * len(fields), 3.2))
+    for ax, field in zip(np.atleast_1d(axes), fields):
+        ax.hist(ok[field].to_numpy(), bins=40, color="#4477aa")
+        ax.set_xlabel(f"{field} ({FIELDS[field][1]})")
+        ax.set_ylabel("cases")
+    fig.suptitle(f"{len(ok)} random cases")
+    paths = [_save(plt, fig, folder / "histograms.png")]
+    keys = [a.key for a in spec.axes]
+    fig, axes = plt.subplots(1, len(keys), figsize=(3.2 * len(keys), 3.2), squeeze=False)
+    for ax, key in zip(axes[0], keys):
+        ax.plot(ok[key].to_numpy(), ok["delta_r"].to_numpy(), ".", ms=2, alpha=0.5)
+        ax.set_xlabel(key)
+        ax.set_ylabel("delta_r (m)")
+    fig.suptitle("permanent deformation against each drawn input")
+    paths.append(_save(plt, fig, folder / "scatter_delta_r.png"))
+    return paths
+
+
+def _kinetic_energy(plt, ok, spec: SweepSpec, trajectories: Path, folder: Path) -> list[Path]:
+    """T(t) of every kept case, from its first contact (the paper's Figures 9 and 11)."""
+    import pyarrow.parquet as pq
+    files = sorted(trajectories.glob("case-*.parquet"), key=lambda p: int(p.stem.split("-")[1]))
+    if not files:
+        return []
+    keys = [a.key for a in spec.axes]
+    by_case = ok.set_index("case")
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for path in files:
+        case = int(path.stem.split("-")[1])
+        if case not in by_case.index:
+            continue
+        table = pq.read_table(path, columns=["t", "T", "phase"]).to_pandas()
+        contact = table[table["phase"] != "free"]
+        if contact.empty:
+            continue
+        t0 = contact["t"].iloc[0]
+        label = ", ".join(f"{k} = {by_case.loc[case, k]:.4g}" for k in keys)
+        ax.plot((contact["t"] - t0) * 1e3, contact["T"], lw=1.2, label=label)
+    ax.set_xlabel("t from first contact (ms)")
+    ax.set_ylabel("T (J)")
+    ax.set_title("kinetic energy through the impact (Figs. 9 and 11)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return [_save(plt, fig, folder / "kinetic_energy.png")]
+
+
+def _filename(key: str) -> str:
+    return key.replace("[", "").replace("]", "").replace(".", "_")
