@@ -72,3 +72,20 @@ def test_targets_are_judged_on_the_measured_figures():
     assert verdicts["CVODE with the generated C reaches 1e-9 relative error in u_final"] == ("5.0e-10", "met")
     assert verdicts["right-hand side, n = 2, from C"] == ("50 / 52 / 120 / 51 ns", "missed")
     assert verdicts["cold build (derive + emit + compile), n = 10"] == ("5.0 s", "met")
+
+
+@pytest.mark.slow
+def test_sweep_benchmark_reports_overhead_and_the_cluster_run(monkeypatch):
+    pytest.importorskip("distributed")
+    from impactgen.bench import sweep as bench_sweep
+    monkeypatch.setattr(bench_sweep, "engine_time", lambda count=200, blocks=5: 7e-4)
+    result = {"overhead": bench_sweep.overhead(200), "monte_carlo": bench_sweep.monte_carlo(100)}
+    assert result["overhead"]["ok"] == 200 and math.isfinite(result["overhead"]["ratio"])
+    for where in ("pool", "dask"):
+        run = result["monte_carlo"][where]
+        assert "error" not in run, run
+        assert run["cases"] == 100 and run["ok"] == 100 and run["impacts"] == 100 and run["peak_rss_mib"] > 0
+    rows = bench_sweep.sweep_targets(result)
+    assert [r["verdict"] for r in rows][1:] == ["met", "met"]
+    text = "\n".join(bench_sweep.sweep_report_lines(result))
+    assert "impacts/s" in text and "dask scheduler + 2 dask worker" in text

@@ -10,6 +10,7 @@ import dataclasses
 import difflib
 import math
 import re
+from collections import abc
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -405,13 +406,18 @@ def _with_element(dotted: str, target: dict[str, Any], section: str, key: str, i
 
 def plain(value: Any) -> Any:
     """numpy scalars and arrays, and tuples, as the plain Python values TOML gives."""
+    if type(value) in _PLAIN:  # the common case, checked first: scenes are read per sweep case
+        return value
     if hasattr(value, "tolist") and callable(value.tolist):  # numpy array or scalar
         return value.tolist()
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
-    if isinstance(value, Mapping):
+    if isinstance(value, abc.Mapping):
         return {k: plain(v) for k, v in value.items()}
     return value
+
+
+_PLAIN = {float, int, str, bool, type(None)}
 
 
 def _read_sections(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
@@ -510,7 +516,8 @@ def _check_physics(scene: Scene) -> None:
 
 
 def _deep_copy(raw: Mapping[str, Any]) -> dict[str, Any]:
-    return {k: _deep_copy(v) if isinstance(v, Mapping) else plain(v) for k, v in raw.items()}
+    return {k: v if type(v) in _PLAIN else _deep_copy(v) if isinstance(v, (dict, abc.Mapping)) else plain(v)
+            for k, v in raw.items()}
 
 
 def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:

@@ -1,4 +1,4 @@
-"""Benchmarks: error against run time, right-hand-side cost, and build cost as n grows."""
+"""Benchmarks: error against run time, right-hand-side cost, build cost as n grows, and sweeps."""
 from __future__ import annotations
 
 import time
@@ -6,7 +6,7 @@ from pathlib import Path
 
 
 def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
-    """Run the parts asked for ("workprecision", "rhs", "scaling") and write the report."""
+    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep") and write the report."""
     from .report import write_report
     from .rhs import rhs_benchmark
     from .scaling import scaling
@@ -15,5 +15,9 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     runs, truths, notes = run_workprecision(QUICK if quick else FULL) if "workprecision" in parts else ([], [], [])
     rhs_rows = rhs_benchmark((2, 3, 5) if quick else (2, 3, 5, 10, 20)) if "rhs" in parts else []
     scaling_rows = scaling(tuple(range(1, 5)) if quick else tuple(range(1, 21))) if "scaling" in parts else []
+    sweep_result = {}
+    if "sweep" in parts:
+        from .sweep import sweep_benchmark
+        sweep_result = sweep_benchmark(quick)
     return write_report(out, "quick" if quick else "full", runs, truths, notes, rhs_rows, scaling_rows,
-                        time.perf_counter() - started)
+                        time.perf_counter() - started, sweep_result)

@@ -143,7 +143,9 @@ def targets(runs: list[Run], rhs_rows: list[dict], scaling_rows: list[dict]) -> 
 
 
 def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], notes: list[str],
-                 rhs_rows: list[dict], scaling_rows: list[dict], elapsed_s: float) -> Path:
+                 rhs_rows: list[dict], scaling_rows: list[dict], elapsed_s: float,
+                 sweep_result: dict | None = None) -> Path:
+    from .sweep import sweep_report_lines, sweep_targets
     out.mkdir(parents=True, exist_ok=True)
     info = machine()
     _write_csv(out / "workprecision.csv", [asdict(r) for r in runs])
@@ -151,11 +153,13 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
     _write_csv(out / "scaling.csv", scaling_rows)
     scenes = list(dict.fromkeys(r.scene for r in runs))
     summary = {s: speedups(runs, s) for s in scenes}
-    goals = targets(runs, rhs_rows, scaling_rows)
+    sweep_result = sweep_result or {}
+    goals = targets(runs, rhs_rows, scaling_rows) + sweep_targets(sweep_result)
     (out / "benchmark.json").write_text(json.dumps({
         "mode": mode, "machine": info, "elapsed_s": elapsed_s, "notes": notes,
         "truth": [asdict(t) for t in truths], "runs": [asdict(r) for r in runs],
         "speedups_at_rtol_1e-8": summary, "targets": goals, "rhs": rhs_rows, "scaling": scaling_rows,
+        "sweep": sweep_result,
     }, indent=1, default=lambda v: None))
     figures = [_plot_workprecision(runs, s, out) for s in scenes]
     if rhs_rows:
@@ -218,6 +222,8 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
                   "| links | derive (s) | emit (s) | compile (s) | total (s) | C bytes |", "|---|---|---|---|---|---|"]
         lines += [f"| {r['links']} | {r['derive_s']:.2f} | {r['emit_s']:.2f} | {r['compile_s']:.2f} | "
                   f"{r['total_s']:.2f} | {r['c_bytes']} |" for r in scaling_rows]
+    if sweep_result:
+        lines += sweep_report_lines(sweep_result)
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path

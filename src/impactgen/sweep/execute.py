@@ -16,7 +16,8 @@ from typing import Any, Callable, Iterator
 from ..errors import SceneError
 
 CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep overhead small
-MAX_CHUNK = 500  # cases; a lost chunk (a dead worker) costs at most this much work again
+MAX_CHUNK = 200  # cases: a lost chunk costs at most this much work again, and the last chunk to
+# finish keeps the other workers idle for at most this many cases
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
 
 Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)

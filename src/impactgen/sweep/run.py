@@ -129,14 +129,10 @@ class OutputFolder:
                                       "specification); choose another folder to start a new one")
         stamp.write_text(json.dumps(described, indent=1) + "\n")
 
-    def done(self) -> dict[int, dict[str, Any]]:
-        """Rows of the cases finished in earlier runs (a resume computes only the others)."""
+    def done(self) -> list:
+        """The parts finished in earlier runs, as DataFrames (a resume computes only the rest)."""
         import pyarrow.parquet as pq
-        rows: dict[int, dict[str, Any]] = {}
-        for part in sorted(self.parts.glob("part-*.parquet")):
-            for row in pq.read_table(part).to_pylist():
-                rows[int(row["case"])] = row
-        return rows
+        return [pq.read_table(part).to_pandas() for part in sorted(self.parts.glob("part-*.parquet"))]
 
     def write_part(self, rows: list[dict[str, Any]]) -> None:
         import pyarrow as pa
@@ -196,29 +192,46 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
         raise SceneError("--trajectories", "kept trajectories are written into the --out folder: give one")
     folder = OutputFolder(out, scene, spec) if out is not None else None
     try:
-        rows = folder.done() if folder else {}
-        if rows and on_resume:
-            on_resume(len(rows))
-        if progress and rows:
-            progress(len(rows))
-        todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in rows]
+        frames = folder.done() if folder else []  # one small DataFrame per chunk: columns, not row dicts
+        finished = {int(i) for f in frames for i in f["case"]}
+        if finished and on_resume:
+            on_resume(len(finished))
+        if progress and finished:
+            progress(len(finished))
+        todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in finished]
         for chunk_rows in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
             for row in chunk_rows:
                 kept = row.pop(TRAJECTORY, None)
                 if kept is not None and folder:
                     folder.write_trajectory(row["case"], kept)
-                rows[row["case"]] = row
             if folder:
                 folder.write_part(chunk_rows)
+            frames.append(pd.DataFrame(chunk_rows))
             if progress:
                 progress(len(chunk_rows))
-        frame = pd.DataFrame([rows[i] for i in sorted(rows)])
+        frame = _table(frames, spec)
         if folder:
             folder.write_result(frame)
         return frame
     finally:
         if folder:
             folder.close()
+
+
+ROW_END = ("status", "message", "warnings", "wall_s")  # the last columns of the table
+
+
+def _table(frames: list, spec: SweepSpec):
+    """The chunks as one table in case order: case, the varied keys, the summary fields, then
+    status, message, warnings and wall time (a case run twice, by a resume, appears once)."""
+    import pandas as pd
+    if not frames:
+        return pd.DataFrame(columns=["case", *(a.key for a in spec.axes), *ROW_END])
+    frame = pd.concat(frames, ignore_index=True)
+    frame = frame.drop_duplicates("case", keep="last").sort_values("case", ignore_index=True)
+    front = ["case", *(a.key for a in spec.axes)]
+    middle = [c for c in frame.columns if c not in front and c not in ROW_END]
+    return frame[front + middle + [c for c in ROW_END if c in frame.columns]]
 
 
 def _kept_cases(trajectories: int | Iterable[int], total: int) -> frozenset[int]:
@@ -243,4 +256,11 @@ def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: i
     workers = workers or os.cpu_count() or 1
     if workers == 1:
         return execute.in_process(run_chunk, payload, options, todo)
+    _load_model(scene)  # forked workers inherit it loaded: no start-up cost per worker
     return execute.process_pool(run_chunk, payload, options, todo, workers)
+
+
+def _load_model(scene: Scene) -> None:
+    from ..build import compile_model
+    from ..engines import model_spec
+    compile_model(model_spec(scene))

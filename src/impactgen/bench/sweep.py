@@ -1,0 +1,185 @@
+"""Sweep benchmark: what a sweep costs on top of the engine, and a Monte Carlo at scale.
+
+- Overhead: a summary-only sweep of the paper's scene (omega20 varied) on a pool of two
+  workers, against N times the engine's own time per impact over two cores. The engine's
+  time is the median of warm `simulate` calls on the same kind of cases in this process,
+  measured before and after the sweep (their mean is used; both are reported).
+- Scale: a Monte Carlo over seven uncertain inputs (MONTE_CARLO) on the local pool, and the
+  same command on a Dask cluster made of a `dask scheduler` and two `dask worker` processes
+  started separately on localhost. Each driver runs in its own process, which reports its
+  wall time and its own peak resident memory (the workers are other processes).
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+OVERHEAD_TARGET = 1.15  # sweep wall time at most this times N x engine time / workers
+WORKERS = 2
+MONTE_CARLO = {  # the ranges docs/sweeps.md states
+    "initial.q_deg[1]": "uniform(-80,-60)",
+    "initial.q_deg[2]": "uniform(-70,-50)",
+    "initial.u[1]": "uniform(-0.3,-0.05)",
+    "initial.u[2]": "uniform(-0.5,-0.1)",
+    "contact.friction": "uniform(0.1,0.4)",
+    "rod.yield_strength": "normal(1.12e9,0.08e9)",
+    "surface.yield_strength": "normal(1.12e9,0.08e9)",
+}
+MONTE_CARLO_SEED = 2020
+
+_DRIVER = """
+import json, resource, sys, time
+import impactgen
+vary, n, seed, scheduler = json.loads(sys.argv[1])
+started = time.perf_counter()
+table = impactgen.sweep("paper", vary=vary, random=n, seed=seed, scheduler=scheduler,
+                        workers=None if scheduler not in (None, "local") else %d)
+wall = time.perf_counter() - started
+ok = table[table["status"] == "ok"]
+print(json.dumps({"cases": len(table), "ok": len(ok), "impacts": int(ok["impacts"].sum()), "wall_s": wall,
+                  "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "statuses": table["status"].value_counts().to_dict()}))
+""" % WORKERS
+
+
+def engine_time(count: int = 200, blocks: int = 5) -> float:
+    """Median seconds of one warm `simulate` of the paper's impact (omega20 varied)."""
+    import numpy as np
+
+    import impactgen
+    base = impactgen.load_scene("paper")
+    scenes = [base.replace({"initial.u[2]": float(w)}) for w in np.linspace(-0.5, -0.1, count)]
+    for scene in scenes[:20]:
+        impactgen.simulate(scene)
+    medians = []
+    for _ in range(blocks):
+        started = time.perf_counter()
+        for scene in scenes:
+            impactgen.simulate(scene)
+        medians.append((time.perf_counter() - started) / count)
+    return statistics.median(medians)
+
+
+def overhead(cases: int) -> dict:
+    import impactgen
+    before = engine_time()
+    started = time.perf_counter()
+    table = impactgen.sweep("paper", vary={"initial.u[2]": f"linspace(-0.5,-0.1,{cases})"}, workers=WORKERS)
+    wall = time.perf_counter() - started
+    after = engine_time()
+    engine = (before + after) / 2
+    ideal = cases * engine / WORKERS
+    return {"cases": cases, "workers": WORKERS, "wall_s": wall, "engine_ms_before": before * 1e3,
+            "engine_ms_after": after * 1e3, "ideal_s": ideal, "ratio": wall / ideal,
+            "ok": int((table["status"] == "ok").sum())}
+
+
+def _drive(cases: int, scheduler: str | None) -> dict:
+    args = json.dumps([MONTE_CARLO, cases, MONTE_CARLO_SEED, scheduler])
+    res = subprocess.run([sys.executable, "-c", _DRIVER, args], capture_output=True, text=True, timeout=3600)
+    if res.returncode != 0:
+        return {"error": res.stderr.strip().splitlines()[-1] if res.stderr.strip() else f"exit {res.returncode}"}
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def monte_carlo(cases: int) -> dict:
+    """The Monte Carlo on the local pool, then on a separately started Dask cluster."""
+    pool = _drive(cases, None)
+    cluster = _on_dask_cluster(cases)
+    return {"cases": cases, "pool": pool, "dask": cluster}
+
+
+def _on_dask_cluster(cases: int) -> dict:
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        return {"error": "dask distributed is not installed (pip install 'impactgen[sweep]')"}
+    with tempfile.TemporaryDirectory(prefix="impactgen-dask-") as tmp:
+        address_file = Path(tmp) / "scheduler.json"
+        log = open(Path(tmp) / "cluster.log", "w")
+        start = dict(stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        processes = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host",
+                                       "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file",
+                                       str(address_file)], **start)]
+        try:
+            for _ in range(600):
+                if address_file.exists() and address_file.stat().st_size:
+                    break
+                time.sleep(0.1)
+            address = json.loads(address_file.read_text())["address"]
+            worker = [sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(address_file),
+                      "--nthreads", "1", "--no-dashboard"]
+            processes += [subprocess.Popen(worker, **start) for _ in range(WORKERS)]
+            from distributed import Client
+            with Client(address, timeout="30s") as client:
+                client.wait_for_workers(WORKERS, timeout=120)
+            result = _drive(cases, address)
+            result["address"] = address
+            return result
+        finally:
+            for process in processes:
+                try:
+                    os.killpg(process.pid, signal.SIGTERM)
+                except ProcessLookupError:
+                    pass
+            for process in processes:
+                process.wait(timeout=60)
+            log.close()
+
+
+def sweep_benchmark(quick: bool) -> dict:
+    return {"overhead": overhead(20000),  # fixed costs (imports, pool start) need a sweep of this size to amortize
+            "monte_carlo": monte_carlo(20000 if quick else 100_000)}
+
+
+def sweep_targets(result: dict) -> list[dict]:
+    from .report import _verdict
+    rows = []
+    o = result.get("overhead")
+    if o:
+        rows.append({"target": f"summary-only sweep, {o['workers']} workers: wall <= {OVERHEAD_TARGET} x "
+                               "(N x engine time per impact / workers)",
+                     "measured": f"{o['ratio']:.2f}x ({o['cases']} cases, {o['wall_s']:.1f} s)",
+                     "verdict": _verdict(o["ratio"], o["ratio"] <= OVERHEAD_TARGET)})
+    mc = result.get("monte_carlo")
+    if mc:
+        for where, key in (("local pool", "pool"), ("Dask cluster (scheduler + 2 workers)", "dask")):
+            run = mc.get(key, {})
+            done = "error" not in run and run.get("cases") == mc["cases"]
+            measured = (f"{run['wall_s']:.0f} s, {run['impacts'] / run['wall_s']:.0f} impacts/s"
+                        if done else run.get("error", "not run"))
+            rows.append({"target": f"{mc['cases']}-case Monte Carlo of the paper's scene finishes ({where})",
+                         "measured": measured, "verdict": "met" if done else "missed"})
+    return rows
+
+
+def sweep_report_lines(result: dict) -> list[str]:
+    lines = ["", "## Sweeps", ""]
+    o = result.get("overhead")
+    if o:
+        lines += [f"Summary-only sweep of the paper's scene, omega20 over {o['cases']} values, {o['workers']} "
+                  f"workers: {o['wall_s']:.2f} s. The engine's time per impact in this process: "
+                  f"{o['engine_ms_before']:.3f} ms before the sweep, {o['engine_ms_after']:.3f} ms after; "
+                  f"N x its mean / {o['workers']} = {o['ideal_s']:.2f} s, so the sweep took "
+                  f"{o['ratio']:.2f} times that.", ""]
+    mc = result.get("monte_carlo")
+    if mc:
+        lines += [f"Monte Carlo, {mc['cases']} cases, seed {MONTE_CARLO_SEED}, inputs drawn as:", ""]
+        lines += [f"- `{k}`: `{v}`" for k, v in MONTE_CARLO.items()]
+        lines += ["", "| where | wall (s) | cases ok | impacts | impacts/s | driver peak RSS (MiB) |",
+                  "|---|---|---|---|---|---|"]
+        for where, key in (("local pool, 2 workers", "pool"), ("Dask: dask scheduler + 2 dask worker", "dask")):
+            run = mc.get(key, {})
+            if "error" in run or not run:
+                lines.append(f"| {where} | {run.get('error', 'not run')} | | | | |")
+            else:
+                lines.append(f"| {where} | {run['wall_s']:.1f} | {run['ok']} | {run['impacts']} | "
+                             f"{run['impacts'] / run['wall_s']:.0f} | {run['peak_rss_mib']:.0f} |")
+    return lines
