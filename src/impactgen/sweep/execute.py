@@ -48,8 +48,13 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
     while queue:
         retry: list[tuple[Chunk, int]] = []
         pool = ProcessPoolExecutor(max_workers=workers)
+        finished_normally = False
+        pending: dict = {}
+        sent = 0
         try:
-            pending = {pool.submit(run_chunk, payload, chunk, options): (chunk, tries) for chunk, tries in queue}
+            for chunk, tries in queue:
+                pending[pool.submit(run_chunk, payload, chunk, options)] = (chunk, tries)
+                sent += 1
             while pending:
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for future in finished:
@@ -60,12 +65,15 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
                         retry.append((chunk, tries + 1))
                         continue
                     yield rows
-        except BrokenProcessPool:  # raised by submit once a worker has died
-            retry += list(pending.values())
+            finished_normally = True
+        except BrokenProcessPool:  # submit, before any result was taken: a worker died already
+            retry += [(chunk, tries + 1) for chunk, tries in pending.values()] + queue[sent:]
+            finished_normally = True
         finally:
             for future in list(pending):
                 future.cancel()
-            pool.shutdown(wait=True, cancel_futures=True)
+            # interrupted (Ctrl-C, SIGTERM): return at once, the workers end after their chunk
+            pool.shutdown(wait=finished_normally, cancel_futures=True)
         queue = []
         if retry:
             print(f"impactgen: a worker process died; running its {len(retry)} unfinished chunks "

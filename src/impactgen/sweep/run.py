@@ -1,4 +1,4 @@
-"""Run a sweep: every case through `simulate`, on a local process pool, one row per case.
+"""Run a sweep: every case through `simulate`, one row per case, where execute.py puts it.
 
 A case that fails (a solver failure, or a combination the scene checks refuse) is a row with
 its status and message; the sweep goes on. With an output folder every finished chunk is
