@@ -153,13 +153,16 @@ def test_local_cluster_gives_the_pool_s_table(pool_table):
     assert _comparable(on_cluster).equals(_comparable(pool_table))
 
 
-@pytest.mark.slow
-def test_separately_started_scheduler_and_workers_give_the_pool_s_table(pool_table, tmp_path):
+@pytest.fixture
+def dask_cluster(tmp_path):
+    """A `dask scheduler` and two `dask worker` processes started separately on localhost;
+    yields the scheduler's address and the worker processes."""
     pytest.importorskip("distributed")
-    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
     address_file = tmp_path / "scheduler.json"
-    processes = [_start(dask + ["--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                                "--scheduler-file", str(address_file)], tmp_path / "scheduler.log")]
+    scheduler = _start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                        "--port", "0", "--no-dashboard", "--scheduler-file", str(address_file)],
+                       tmp_path / "scheduler.log")
+    workers = []
     try:
         for _ in range(300):
             if address_file.exists() and address_file.stat().st_size:
@@ -167,18 +170,43 @@ def test_separately_started_scheduler_and_workers_give_the_pool_s_table(pool_tab
             time.sleep(0.1)
         worker = [sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(address_file),
                   "--nthreads", "1", "--no-dashboard"]
-        processes += [_start(worker, tmp_path / f"worker{k}.log") for k in range(2)]
+        workers = [_start(worker, tmp_path / f"worker{k}.log") for k in range(2)]
         address = json.loads(address_file.read_text())["address"]
         from distributed import Client
         with Client(address, timeout="30s") as client:
             client.wait_for_workers(2, timeout=60)
-        table = impactgen.sweep("paper", vary=GRID, scheduler=address)
-        assert _comparable(table).equals(_comparable(pool_table))
+        yield address, workers
     finally:
-        for process in processes:
-            os.killpg(process.pid, signal.SIGTERM)
-        for process in processes:
+        for process in [scheduler, *workers]:
+            try:
+                os.killpg(process.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+        for process in [scheduler, *workers]:
             process.wait(timeout=30)
+
+
+@pytest.mark.slow
+def test_separately_started_scheduler_and_workers_give_the_pool_s_table(pool_table, dask_cluster):
+    address, _ = dask_cluster
+    table = impactgen.sweep("paper", vary=GRID, scheduler=address)
+    assert _comparable(table).equals(_comparable(pool_table))
+
+
+@pytest.mark.slow
+def test_a_dask_worker_killed_mid_sweep_loses_no_row(dask_cluster, tmp_path):
+    address, workers = dask_cluster
+    out = tmp_path / "dask-killed"
+    process = subprocess.Popen(CLI + ["sweep", "paper", *SLOW_CASES, "--scheduler", address, "--out", str(out)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _wait_for_parts(out, 1, process)
+    assert process.poll() is None, "the sweep ended before a worker could be killed"
+    os.killpg(workers[0].pid, signal.SIGKILL)  # the worker and its nanny: gone for good
+    _, stderr = process.communicate(timeout=600)
+    assert process.returncode == 0, stderr
+    import pandas as pd
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert sorted(table["case"]) == list(range(160)) and set(table["status"]) == {"ok"}
 
 
 def _children(pid: int) -> list[int]:

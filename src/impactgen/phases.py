@@ -291,8 +291,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None, de
     params = fill_params(model, scene, consts)
     free_atol = default_atol(scene, model.nstate)
     session = CvodeSession.open(model, scene, free_atol)
-    polynomials = dense_output or t_eval is not None
-    session.keep_polynomials(polynomials)
+    session.keep_polynomials(dense_output or t_eval is not None)
     out_index = {name: i for i, name in enumerate(model.output_names)}
     analytic = bool(model.spec.jacobian)
 
