@@ -202,7 +202,10 @@ def test_a_dask_worker_killed_mid_sweep_loses_no_row(dask_cluster, tmp_path):
     _wait_for_parts(out, 1, process)
     assert process.poll() is None, "the sweep ended before a worker could be killed"
     os.killpg(workers[0].pid, signal.SIGKILL)  # the worker and its nanny: gone for good
-    _, stderr = process.communicate(timeout=600)
+    try:
+        _, stderr = process.communicate(timeout=180)
+    finally:
+        process.kill()
     assert process.returncode == 0, stderr
     import pandas as pd
     table = pd.read_parquet(out / "sweep.parquet")
@@ -237,7 +240,10 @@ def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
     workers = _children(process.pid)
     assert process.poll() is None and workers, "the sweep ended before a worker could be killed"
     os.kill(workers[0], signal.SIGKILL)
-    stdout, stderr = process.communicate(timeout=600)
+    try:
+        stdout, stderr = process.communicate(timeout=180)
+    finally:
+        process.kill()
     assert process.returncode == 0, stderr
     assert "a worker process died" in stderr  # the pool broke, and its chunks ran again
     import pandas as pd
@@ -282,6 +288,16 @@ def test_plot_and_trajectories_draw_the_paper_figures(tmp_path):
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert len(list((tmp_path / "trajectories").glob("case-*.parquet"))) == 4
+    named = subprocess.run(CLI + ["sweep", "paper", "--vary", "initial.u[2]=linspace(-0.5,-0.1,6)",
+                                  "--trajectory-cases", "1,4", "--out", str(tmp_path / "named"), "--quiet"],
+                           capture_output=True, text=True, timeout=300)
+    assert named.returncode == 0, named.stderr
+    assert sorted(p.name for p in (tmp_path / "named" / "trajectories").iterdir()) == \
+        ["case-1.parquet", "case-4.parquet"]
+    bad = subprocess.run(CLI + ["sweep", "paper", "--vary", "initial.u[2]=[-0.2]", "--trajectory-cases", "3",
+                                "--out", str(tmp_path / "bad"), "--quiet"], capture_output=True, text=True,
+                         timeout=300)
+    assert bad.returncode == 2 and "case 3 does not exist" in bad.stderr
     for name in ("kinetic_energy.png", "delta_T_vs_delta_r.png", "delta_r_vs_initial_u2.png"):
         assert (tmp_path / "figures" / name).exists(), name
     drawn = impactgen.sweep("paper", vary={"initial.u[2]": "uniform(-0.5,-0.1)"}, random=30, workers=1,

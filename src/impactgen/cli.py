@@ -86,8 +86,11 @@ def _parser() -> argparse.ArgumentParser:
     sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="run on a Dask cluster: tcp://HOST:PORT of its scheduler, or 'local' "
                          "for a LocalCluster started here")
-    sw.add_argument("--trajectories", type=int, default=0, metavar="K",
-                    help="keep the samples of K evenly chosen cases (needs --out), for T(t) figures")
+    kept = sw.add_mutually_exclusive_group()
+    kept.add_argument("--trajectories", type=int, default=0, metavar="K",
+                      help="keep the samples of K evenly chosen cases (needs --out), for T(t) figures")
+    kept.add_argument("--trajectory-cases", default=None, metavar="I,J,...",
+                      help="keep the samples of these cases (numbered from 0, as the table's 'case')")
     sw.add_argument("--plot", action="store_true", help="draw the figures the varied keys call for "
                     "into OUT/figures (needs --out)")
     sw.add_argument("--out", type=Path, default=None, help="folder for sweep.parquet; the same command "
@@ -288,7 +291,7 @@ def _sweep(args: argparse.Namespace) -> int:
               f"computing the other {spec.count() - count}", file=sys.stderr)
     try:
         frame = run_sweep(scene, spec, workers=args.workers, out=args.out, progress=progress,
-                          scheduler=args.scheduler, trajectories=args.trajectories, on_resume=resumed)
+                          scheduler=args.scheduler, trajectories=_kept(args), on_resume=resumed)
     except KeyboardInterrupt:
         for bar in bars:
             bar.close()
@@ -311,6 +314,17 @@ def _sweep(args: argparse.Namespace) -> int:
         for path in plot_sweep(frame, spec, args.out):
             print(path)
     return 0
+
+
+def _kept(args: argparse.Namespace) -> int | list[int]:
+    """--trajectories K, or the case numbers of --trajectory-cases."""
+    if args.trajectory_cases is None:
+        return args.trajectories
+    try:
+        return [int(v) for v in args.trajectory_cases.split(",") if v.strip()]
+    except ValueError:
+        raise SceneError("--trajectory-cases", f"expected case numbers like 0,5,9, got "
+                                               f"{args.trajectory_cases!r}") from None
 
 
 def _examples(args: argparse.Namespace) -> int:

@@ -154,13 +154,19 @@ class SimulationResult:
     stats: dict[str, Any]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
-    summary: dict[str, Any] = field(init=False)
-    first_impact: dict[str, Any] = field(init=False)
 
     def __post_init__(self) -> None:
         _fill_impact_energies(self.trajectory, self.n, self.impacts)
-        self.first_impact = _first_impact_summary(self)
-        self.summary = self.first_impact if self._to_separation() else _run_summary(self)
+
+    @cached_property
+    def first_impact(self) -> dict[str, Any]:
+        """The first impact (MODEL section 6), computed on first use and kept."""
+        return _first_impact_summary(self)
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The run (for a run to separation, its first impact), computed on first use and kept."""
+        return self.first_impact if self._to_separation() else _run_summary(self)
 
     def _to_separation(self) -> bool:
         return self.scene.solver.t_end is None and self.status != "failed"

@@ -68,6 +68,17 @@ def engine_time(count: int = 200, blocks: int = 5) -> float:
 
 
 def overhead(cases: int) -> dict:
+    """Measured in a fresh process, as a user's sweep would run (a process with other threads
+    starts its workers clean instead of forking, which costs their start-up)."""
+    code = ("import json, sys; from impactgen.bench.sweep import measure_overhead; "
+            "print(json.dumps(measure_overhead(int(sys.argv[1]))))")
+    res = subprocess.run([sys.executable, "-c", code, str(cases)], capture_output=True, text=True, timeout=3600)
+    if res.returncode != 0:
+        raise RuntimeError(f"the overhead benchmark failed: {res.stderr.strip()[-500:]}")
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def measure_overhead(cases: int) -> dict:
     import impactgen
     before = engine_time()
     started = time.perf_counter()

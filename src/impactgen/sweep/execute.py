@@ -8,7 +8,9 @@ its workers ends as rows with status "failed", so no case is ever missing from t
 """
 from __future__ import annotations
 
+import multiprocessing
 import sys
+import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Iterator
@@ -47,7 +49,7 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
     queue = [(chunk, 0) for chunk in chunked(todo, workers)]
     while queue:
         retry: list[tuple[Chunk, int]] = []
-        pool = ProcessPoolExecutor(max_workers=workers)
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_start_method())
         finished_normally = False
         pending: dict = {}
         sent = 0
@@ -83,6 +85,16 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
                 yield lost_rows(chunk, f"its worker process died {tries} times (out of memory, or killed)")
             else:
                 queue.append((chunk, tries))
+
+
+def _start_method() -> multiprocessing.context.BaseContext:
+    """Fork while this process has a single thread: the workers inherit the loaded model and
+    start at once. With other threads (a broken pool's, a progress bar's, a caller's) a fork
+    can copy a held lock into a child that then never runs, so start clean workers instead."""
+    methods = multiprocessing.get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        return multiprocessing.get_context("fork")
+    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
 
 
 def dask_cluster(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
