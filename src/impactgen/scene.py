@@ -385,9 +385,9 @@ def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
 def _with_element(dotted: str, target: dict[str, Any], section: str, key: str, index: int,
                   value: Any) -> list[Any]:
     """The list of `section.key` with element `index` (from 1) set to `value`."""
-    current = target.get(key)
+    current = plain(target.get(key))
     if current is None and section == "initial" and key in ("q", "q_deg"):
-        other = target.get("q_deg" if key == "q" else "q")  # the angles in the other unit
+        other = plain(target.get("q_deg" if key == "q" else "q"))  # the angles in the other unit
         if isinstance(other, list) and all(isinstance(v, (int, float)) for v in other):
             convert = math.radians if key == "q" else math.degrees
             current = [convert(v) for v in other]
@@ -442,7 +442,7 @@ def _read_sections(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None = None,
                     source: str = "<memory>") -> Scene:
     """Check a scene given as nested dicts (as TOML parses it) and build a `Scene`."""
-    raw = _deep_copy(raw)
+    raw = _tables_copied(raw)
     _apply_overrides(raw, overrides or {})
     sections = _read_sections(raw)
 
@@ -450,7 +450,7 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
         spec = SCHEMA[section][key]
         dotted = f"{section}.{key}" if section else key
         if key in sections[section]:
-            return _coerce(dotted, sections[section][key], spec, n)
+            return _coerce(dotted, plain(sections[section][key]), spec, n)
         if spec.default is _MISSING:
             raise SceneError(dotted, f"missing required key ({spec.doc or spec.kind})"
                              if spec.doc else "missing required key")
@@ -515,9 +515,10 @@ def _check_physics(scene: Scene) -> None:
                              "of the chain must start on or above the surface, the tip at most touching it")
 
 
-def _deep_copy(raw: Mapping[str, Any]) -> dict[str, Any]:
-    return {k: v if type(v) in _PLAIN else _deep_copy(v) if isinstance(v, (dict, abc.Mapping)) else plain(v)
-            for k, v in raw.items()}
+def _tables_copied(raw: Mapping[str, Any]) -> dict[str, Any]:
+    """The scene's top level and its tables copied, so that overrides change the copy only
+    (values are replaced, never changed in place; `plain` makes them plain when read)."""
+    return {k: dict(v) if isinstance(v, (dict, abc.Mapping)) else v for k, v in raw.items()}
 
 
 def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:
