@@ -1,9 +1,9 @@
 """Sweep benchmark: what a sweep costs on top of the engine, and a Monte Carlo at scale.
 
 - Overhead: a summary-only sweep of the paper's scene (omega20 varied) on a pool of two
-  workers, against N times the engine's own time per impact over two cores. The engine's
-  time is the median of warm `simulate` calls on the same kind of cases in this process,
-  measured before and after the sweep (their mean is used; both are reported).
+  workers, against N times the engine's own time per impact over two cores, measured as
+  that: the same two workers each running `simulate` (and reading its summary) over their
+  half of the same cases, nothing else. The two are alternated three times; medians.
 - Scale: a Monte Carlo over seven uncertain inputs (MONTE_CARLO) on the local pool, and the
   same command on a Dask cluster made of a `dask scheduler` and two `dask worker` processes
   started separately on localhost. Each driver runs in its own process, which reports its
@@ -49,24 +49,6 @@ print(json.dumps({"cases": len(table), "ok": len(ok), "impacts": int(ok["impacts
 """ % WORKERS
 
 
-def engine_time(count: int = 200, blocks: int = 5) -> float:
-    """Median seconds of one warm `simulate` of the paper's impact (omega20 varied)."""
-    import numpy as np
-
-    import impactgen
-    base = impactgen.load_scene("paper")
-    scenes = [base.replace({"initial.u[2]": float(w)}) for w in np.linspace(-0.5, -0.1, count)]
-    for scene in scenes[:20]:
-        impactgen.simulate(scene)
-    medians = []
-    for _ in range(blocks):
-        started = time.perf_counter()
-        for scene in scenes:
-            impactgen.simulate(scene)
-        medians.append((time.perf_counter() - started) / count)
-    return statistics.median(medians)
-
-
 def overhead(cases: int) -> dict:
     """Measured in a fresh process, as a user's sweep would run (a process with other threads
     starts its workers clean instead of forking, which costs their start-up)."""
@@ -78,18 +60,49 @@ def overhead(cases: int) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-def measure_overhead(cases: int) -> dict:
+def _engine_only(raw: dict, values: list[float]) -> float:
+    """Seconds a worker spends in `simulate` alone over these cases (scenes built first)."""
     import impactgen
-    before = engine_time()
+    from ..scene import scene_from_dict
+    scenes = [scene_from_dict(raw, {"initial.u[2]": w}) for w in values]
+    impactgen.simulate(scenes[0])
     started = time.perf_counter()
-    table = impactgen.sweep("paper", vary={"initial.u[2]": f"linspace(-0.5,-0.1,{cases})"}, workers=WORKERS)
-    wall = time.perf_counter() - started
-    after = engine_time()
-    engine = (before + after) / 2
-    ideal = cases * engine / WORKERS
-    return {"cases": cases, "workers": WORKERS, "wall_s": wall, "engine_ms_before": before * 1e3,
-            "engine_ms_after": after * 1e3, "ideal_s": ideal, "ratio": wall / ideal,
-            "ok": int((table["status"] == "ok").sum())}
+    for scene in scenes:
+        impactgen.simulate(scene).summary
+    return time.perf_counter() - started
+
+
+def _ideal(cases: int) -> float:
+    """N x the engine's time per impact / workers, measured as it would run: the workers each
+    simulate their share of the cases, nothing else; the slower worker's time."""
+    import numpy as np
+
+    import impactgen
+    from ..sweep.execute import _start_method
+    raw = impactgen.load_scene("paper").to_dict()
+    values = np.linspace(-0.5, -0.1, cases).tolist()
+    shares = [values[k::WORKERS] for k in range(WORKERS)]
+    from concurrent.futures import ProcessPoolExecutor
+    with ProcessPoolExecutor(WORKERS, mp_context=_start_method()) as pool:
+        return max(pool.map(_engine_only, [raw] * WORKERS, shares))
+
+
+def measure_overhead(cases: int, rounds: int = 3) -> dict:
+    """The sweep against the engine alone on the same workers, alternated `rounds` times
+    (this machine's timings move by 20 % from minute to minute); medians of each."""
+    import impactgen
+    impactgen.simulate(impactgen.load_scene("paper"))  # the model loaded before any fork
+    ideals, walls, ok = [], [], 0
+    for _ in range(rounds):
+        ideals.append(_ideal(cases))
+        started = time.perf_counter()
+        table = impactgen.sweep("paper", vary={"initial.u[2]": f"linspace(-0.5,-0.1,{cases})"}, workers=WORKERS)
+        walls.append(time.perf_counter() - started)
+        ok = int((table["status"] == "ok").sum())
+    ideal, wall = statistics.median(ideals), statistics.median(walls)
+    return {"cases": cases, "workers": WORKERS, "rounds": rounds, "wall_s": wall, "walls_s": walls,
+            "ideal_s": ideal, "ideals_s": ideals, "engine_ms": ideal * WORKERS / cases * 1e3,
+            "ratio": wall / ideal, "ok": ok}
 
 
 def _drive(cases: int, scheduler: str | None) -> dict:
@@ -176,10 +189,10 @@ def sweep_report_lines(result: dict) -> list[str]:
     o = result.get("overhead")
     if o:
         lines += [f"Summary-only sweep of the paper's scene, omega20 over {o['cases']} values, {o['workers']} "
-                  f"workers: {o['wall_s']:.2f} s. The engine's time per impact in this process: "
-                  f"{o['engine_ms_before']:.3f} ms before the sweep, {o['engine_ms_after']:.3f} ms after; "
-                  f"N x its mean / {o['workers']} = {o['ideal_s']:.2f} s, so the sweep took "
-                  f"{o['ratio']:.2f} times that.", ""]
+                  f"workers, alternated {o['rounds']} times with the engine alone on the same workers: "
+                  f"sweep {', '.join(f'{w:.2f}' for w in o['walls_s'])} s, engine alone "
+                  f"{', '.join(f'{w:.2f}' for w in o['ideals_s'])} s ({o['engine_ms']:.3f} ms per impact). "
+                  f"Medians: {o['wall_s']:.2f} s against {o['ideal_s']:.2f} s, {o['ratio']:.2f} times.", ""]
     mc = result.get("monte_carlo")
     if mc:
         lines += [f"Monte Carlo, {mc['cases']} cases, seed {MONTE_CARLO_SEED}, inputs drawn as:", ""]
