@@ -49,12 +49,13 @@ print(json.dumps({"cases": len(table), "ok": len(ok), "impacts": int(ok["impacts
 """ % WORKERS
 
 
-def overhead(cases: int) -> dict:
+def overhead(cases: int, rounds: int = 3) -> dict:
     """Measured in a fresh process, as a user's sweep would run (a process with other threads
     starts its workers clean instead of forking, which costs their start-up)."""
     code = ("import json, sys; from impactgen.bench.sweep import measure_overhead; "
-            "print(json.dumps(measure_overhead(int(sys.argv[1]))))")
-    res = subprocess.run([sys.executable, "-c", code, str(cases)], capture_output=True, text=True, timeout=3600)
+            "print(json.dumps(measure_overhead(int(sys.argv[1]), int(sys.argv[2]))))")
+    res = subprocess.run([sys.executable, "-c", code, str(cases), str(rounds)], capture_output=True, text=True,
+                         timeout=3600)
     if res.returncode != 0:
         raise RuntimeError(f"the overhead benchmark failed: {res.stderr.strip()[-500:]}")
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -159,8 +160,9 @@ def _on_dask_cluster(cases: int) -> dict:
 
 
 def sweep_benchmark(quick: bool) -> dict:
-    return {"overhead": overhead(20000),  # fixed costs (imports, pool start) need a sweep of this size to amortize
-            "monte_carlo": monte_carlo(20000 if quick else 100_000)}
+    # 20000 cases: the fixed costs (imports, starting the pool) need a sweep this size to amortize
+    return {"overhead": overhead(20000, rounds=1 if quick else 3),
+            "monte_carlo": monte_carlo(10_000 if quick else 100_000)}
 
 
 def sweep_targets(result: dict) -> list[dict]:
