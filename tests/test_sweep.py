@@ -62,6 +62,8 @@ def test_failing_and_invalid_cases_are_rows_and_the_sweep_finishes():
     ({"chain.mass[2]": [1.0, -1.0]}, 0, "chain.mass[2]", "> 0"),
     ({"rod.nu": "normal(0.3,0.5)"}, 50, "rod.nu", "drawn from the distribution"),
     ({"initial.u[3]": [0.1]}, 0, "initial.u[3]", "out of range"),
+    ({"contact.friction": [0.2, "a"]}, 0, "contact.friction", "expected a number"),
+    ({"contact.model": ["hertz", "rigid"]}, 0, "contact.model", "not one of"),
 ])
 def test_values_no_scene_can_take_are_a_bad_specification(vary, random, key, words):
     with pytest.raises(SceneError) as err:

@@ -368,6 +368,17 @@ def split_key(dotted: str) -> tuple[str, str, int | None]:
     return section, key, index
 
 
+def check_value(dotted: str, value: Any, links: int) -> Any:
+    """`value` for key `dotted` (an element too) checked on its own, as the scene checks it
+    for a chain of `links` links: SceneError naming the key if no scene could take it."""
+    section, key, index = split_key(dotted)
+    spec = SCHEMA[section][key]
+    value = plain(value)
+    if index is not None:
+        return _checked(dotted, _number(dotted, value), spec)
+    return _coerce(dotted, value, spec, links)
+
+
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
     for dotted, value in overrides.items():
         section, key, index = split_key(dotted)

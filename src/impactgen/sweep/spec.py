@@ -21,7 +21,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import SceneError
-from ..scene import SCHEMA, Scene, parse_override, split_key
+from ..scene import Scene, check_value, parse_override, split_key
 
 GRIDS = ("linspace", "logspace")
 DISTRIBUTIONS = ("uniform", "normal", "lognormal")
@@ -147,21 +147,25 @@ class SweepSpec:
 
     def check(self, scene: Scene, cases: list[dict[str, Any]]) -> None:
         """Refuse, naming the key, an index out of range for `scene` and any value that no
-        scene could take (a negative mass, a drawn Poisson ratio of 0.7). Values that are
-        bad only together (a yield strength above the modulus) become rows instead."""
+        scene could take (a negative mass, a word for a number, a drawn Poisson ratio of 0.7).
+        Values that are bad only together (a yield strength above the modulus) become rows."""
+        links_vary = any(a.key == "chain.links" for a in self.axes)
         for axis in self.axes:
-            section, key, _ = split_key(axis.key)
-            rule = SCHEMA[section][key]
-            scene.replace({axis.key: cases[0][axis.key]} if cases else {})  # the index fits
-            values = {id(c): c[axis.key] for c in cases}.values() if self.random else axis.values
-            for value in values:
-                if rule.kind in ("float", "floats", "list", "int") and not isinstance(value, bool) \
-                        and isinstance(value, (int, float)):
-                    reason = rule.check(value) if rule.check else None
-                    if reason or not np.isfinite(value):
-                        raise SceneError(axis.key, f"{reason or 'must be finite'}, got {value!r}"
-                                                   + (" (drawn from the distribution: narrow it or "
-                                                      "choose another)" if axis.distribution else ""))
+            try:  # the key (and its index) fits this scene
+                scene.replace({axis.key: cases[0][axis.key]} if cases else {})
+            except SceneError as exc:
+                if exc.key == axis.key:
+                    raise
+                # another key named: a combination with the scene's other values, left to the rows
+            values = [c[axis.key] for c in cases] if self.random else axis.values
+            if links_vary and isinstance(values[0], list):
+                continue  # a per-link list is checked against its case's own link count
+            try:
+                for value in values:
+                    check_value(axis.key, value, scene.n)
+            except SceneError as exc:
+                drawn = " (drawn from the distribution: narrow it or choose another)" if axis.distribution else ""
+                raise SceneError(exc.key, str(exc).split(": ", 1)[-1] + drawn) from None
 
     def describe(self) -> str:
         text = " ".join(f"--vary {a.describe()}" for a in self.axes)
