@@ -446,9 +446,7 @@ def _phase_line(result) -> str:
         return "phases: " + ", ".join(f"{p.phase} [{p.t0:.9g}, {p.t1:.9g}] s" for p in result.phases[:12])
     impact = result.impacts[0]
     end = impact.t_end if impact.t_end is not None else math.inf
-    spans = [p for p in result.phases if p.phase != "free" and impact.t_start <= p.t0 <= end]
-    if len(spans) > 12:
-        spans = spans[:12]
+    spans = [p for p in result.phases if p.phase != "free" and impact.t_start <= p.t0 <= end][:12]
     us = 1e6
     text = ", ".join(f"{p.phase}{' (' + p.friction + ')' if p.friction else ''} "
                      f"{(p.t0 - impact.t_start) * us:.6g}-{(p.t1 - impact.t_start) * us:.6g}"

@@ -7,6 +7,7 @@ Parquet schema's field metadata ("unit"), and in a first comment line of a CSV f
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +56,7 @@ def write_run(result: SimulationResult, out: Path, fmt: str | None = None) -> li
     impacts["duration"] = (np.array([i.duration if i.duration is not None else np.nan
                                      for i in result.impacts], dtype=float), "s")
     paths = [out / f"trajectory.{fmt}", out / f"impacts.{fmt}", out / "summary.json"]
-    writer = _write_parquet if fmt == "parquet" else _write_csv
+    writer = write_parquet if fmt == "parquet" else _write_csv
     try:
         writer(paths[0], trajectory, {"scene": result.scene.to_toml(), "engine": result.engine})
         writer(paths[1], impacts, {"scene": result.scene.to_toml(), "engine": result.engine})
@@ -65,10 +66,11 @@ def write_run(result: SimulationResult, out: Path, fmt: str | None = None) -> li
     return paths
 
 
-def _write_parquet(path: Path, columns: dict[str, tuple[np.ndarray, str]], meta: dict[str, str]) -> None:
+def write_parquet(path: Path, columns: dict[str, tuple[np.ndarray, str]], meta: dict[str, str]) -> None:
+    """Columns (values, unit) as a Parquet file: each unit in its field's metadata, `meta` in
+    the schema's as impactgen.KEY."""
     try:
         import pyarrow as pa
-        import pyarrow.parquet as pq
     except ImportError:
         raise ImpactgenError("Parquet needs pyarrow: pip install 'impactgen[sweep]', or use --format csv") from None
     fields, arrays = [], []
@@ -76,9 +78,16 @@ def _write_parquet(path: Path, columns: dict[str, tuple[np.ndarray, str]], meta:
         array = pa.array(np.asarray(values).tolist() if values.dtype.kind in "US" else values)
         fields.append(pa.field(name, array.type, metadata={"unit": unit}))
         arrays.append(array)
-    table = pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata={f"impactgen.{k}": v
-                                                                          for k, v in meta.items()}))
-    pq.write_table(table, path)
+    write_table(pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata={f"impactgen.{k}": v
+                                                                               for k, v in meta.items()})), path)
+
+
+def write_table(table, path: Path) -> None:
+    """A pyarrow table to `path`, whole or not at all (written aside, then renamed)."""
+    import pyarrow.parquet as pq
+    temporary = path.with_name(path.name + ".tmp")
+    pq.write_table(table, temporary)
+    os.replace(temporary, path)
 
 
 def _write_csv(path: Path, columns: dict[str, tuple[np.ndarray, str]], meta: dict[str, str]) -> None:

@@ -18,6 +18,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from ..errors import ImpactgenError, SceneError
+from ..export import trajectory_columns, write_parquet, write_table
 from ..scene import Scene, scene_from_dict
 from . import execute
 from .spec import SweepSpec
@@ -57,8 +58,7 @@ def case_row(base: dict[str, Any], index: int, overrides: dict[str, Any], keep_t
     row.update(status=result.status, message=result.message, warnings=" | ".join(result.warnings),
                wall_s=time.perf_counter() - started)
     if keep_trajectory:
-        from ..export import trajectory_columns
-        row[TRAJECTORY] = {k: v for k, (v, _) in trajectory_columns(result).items()}
+        row[TRAJECTORY] = trajectory_columns(result)  # with units
     return row
 
 
@@ -136,31 +136,20 @@ class OutputFolder:
 
     def write_part(self, rows: list[dict[str, Any]]) -> None:
         import pyarrow as pa
-        import pyarrow.parquet as pq
         first = min(r["case"] for r in rows)
-        final = self.parts / f"part-{first:09d}-{os.getpid()}-{time.monotonic_ns()}.parquet"
-        temporary = final.with_suffix(".tmp")
-        pq.write_table(pa.Table.from_pylist(rows), temporary)
-        os.replace(temporary, final)  # a part is on disk whole or not at all
+        write_table(pa.Table.from_pylist(rows),
+                    self.parts / f"part-{first:09d}-{os.getpid()}-{time.monotonic_ns()}.parquet")
 
-    def write_trajectory(self, case: int, columns: dict[str, np.ndarray]) -> None:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+    def write_trajectory(self, case: int, columns: dict[str, tuple[np.ndarray, str]]) -> None:
         folder = self.path / "trajectories"
         folder.mkdir(exist_ok=True)
-        table = pa.table({k: (v.tolist() if v.dtype.kind in "US" else v) for k, v in columns.items()})
-        path = folder / f"case-{case}.parquet"
-        pq.write_table(table, path.with_suffix(".tmp"))
-        os.replace(path.with_suffix(".tmp"), path)
+        write_parquet(folder / f"case-{case}.parquet", columns, {"case": str(case)})
 
     def write_result(self, frame) -> Path:
         import pyarrow as pa
-        import pyarrow.parquet as pq
         table = pa.Table.from_pandas(frame, preserve_index=False)
-        table = table.replace_schema_metadata({**(table.schema.metadata or {}), **self.meta})
         path = self.path / RESULT_FILE
-        pq.write_table(table, path.with_suffix(".tmp"))
-        os.replace(path.with_suffix(".tmp"), path)
+        write_table(table.replace_schema_metadata({**(table.schema.metadata or {}), **self.meta}), path)
         return path
 
     def close(self) -> None:
