@@ -22,7 +22,6 @@ from .scene import Scene
 # link, come beside them), with their units.
 OUTPUT_UNITS = {"x_B": "m", "y_B": "m", "v_Bx": "m/s", "v_By": "m/s", "delta": "m",
                 "delta_rate": "m/s", "F": "N", "F_f": "N", "T": "J", "V": "J"}
-STATUSES = ("ok", "no-impact", "failed")
 
 
 @dataclass
