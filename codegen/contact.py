@@ -68,6 +68,47 @@ def restitution_force(d: sm.Expr = delta) -> sm.Expr:
     return hertz_force(d - delta_r, R_res)
 
 
+# Materials (the scene's inputs) and the constants of MODEL section 3 derived from them.
+E_rod, E_surface = sm.symbols("E_rod E_surface", positive=True)
+nu_rod, nu_surface = sm.symbols("nu_rod nu_surface", real=True)
+S_y_rod, S_y_surface = sm.symbols("S_y_rod S_y_surface", positive=True)
+R_tip = sm.Symbol("R_tip", positive=True)
+S_y = sm.Symbol("S_y", positive=True)  # yield strength of the weaker material
+nu = sm.Symbol("nu", real=True)  # its Poisson ratio
+
+
+def material_constants() -> tuple[tuple[sm.Symbol, sm.Expr], ...]:
+    """E*, R, C_j, delta_c, P_c and B from the two materials and the tip radius, as named
+    steps: the constants every force law and switch law is written in."""
+    weaker_rod = S_y_rod <= S_y_surface
+    return (
+        (E_star, E_rod * E_surface / (E_surface * (1 - nu_rod ** 2) + E_rod * (1 - nu_surface ** 2))),
+        (R, R_tip),  # 1/R = 1/R_tip + 1/R_surface, with R_surface infinite for a flat
+        (S_y, sm.Piecewise((S_y_rod, weaker_rod), (S_y_surface, True))),
+        (nu, sm.Piecewise((nu_rod, weaker_rod), (nu_surface, True))),
+        (C_j, sm.Float(1.295) * sm.exp(sm.Float(0.736) * nu)),
+        (delta_c, (sm.pi * C_j * S_y / (2 * E_star)) ** 2 * R),
+        (P_c, sm.Rational(4, 3) * (R / E_star) ** 2 * (sm.pi * C_j * S_y / 2) ** 3),
+        (B, sm.Float(0.14) * sm.exp(23 * S_y / E_star)),
+    )
+
+
+# Laws applied at the switches (MODEL section 4), emitted into the C phase machine.
+P_m = sm.Symbol("P_m", positive=True)  # force at maximum compression
+delta_max = sm.Symbol("delta_max", positive=True)  # penetration at maximum compression
+
+
+def residual_deformation(d_m: sm.Expr = delta_max) -> sm.Expr:
+    """Eq. 12 as this project reads it (the paper's print is garbled; docs/model.md):
+    delta_r = delta_m [1 - ((delta_m/delta_c + 5.5)/6.5)^(-1/2)], never negative."""
+    return sm.Max(d_m * (1 - ((d_m / delta_c + sm.Float(5.5)) / sm.Float(6.5)) ** -sm.Rational(1, 2)), 0)
+
+
+def unloading_radius(d_m: sm.Expr = delta_max, force: sm.Expr = P_m, d_r: sm.Expr = delta_r) -> sm.Expr:
+    """R_res such that the restitution force (Eq. 11) equals P_m at delta_m: continuity."""
+    return (3 * force / (4 * E_star)) ** 2 / (d_m - d_r) ** 3
+
+
 def friction_sign(v: sm.Expr = v_Bx) -> sm.Expr:
     """The regularized sign of MODEL.md section 5: v / sqrt(v^2 + eps^2)."""
     return v / sm.sqrt(v ** 2 + eps ** 2)

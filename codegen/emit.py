@@ -16,17 +16,31 @@ import jinja2
 import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
+from . import machine
 from .expressions import PHASES, ModelExpressions, ModelSpec, assemble_model
+from .parameters import Field
 
 PHASE_CODES = {name: code for code, name in enumerate(PHASES)}
+
+
+def _c_double(value: float) -> str:
+    """The shortest round-trip form of a double as a C literal: 0.92, not 0.920000...04."""
+    text = repr(float(value))
+    return text if any(c in text for c in ".en") else text + ".0"
 
 
 class ModelCPrinter(C99CodePrinter):
     """C99 printer that writes the powers of contact mechanics without pow() where it can."""
 
     def _print_Float(self, expr: sm.Float) -> str:  # shortest round-trip form: 0.92, not 0.920000...04
-        text = repr(float(expr))
-        return text if any(c in text for c in ".en") else text + ".0"
+        return _c_double(float(expr))
+
+    def _print_Piecewise(self, expr: sm.Piecewise) -> str:  # one line: (c1 ? e1 : (c2 ? e2 : e3))
+        *cases, (last, _) = expr.args
+        text = self._print(last)
+        for value, cond in reversed(cases):
+            text = f"({self._print(cond)} ? {self._print(value)} : {text})"
+        return text
 
     def _print_Pi(self, expr: sm.Expr) -> str:  # M_PI is not C99
         return "3.14159265358979323846"
@@ -90,19 +104,45 @@ class GeneratedModel:
     prefix: str
     header: str  # model.h
     source: str  # model.c
+    machine_header: str  # model_machine.h
+    machine_source: str  # model_machine.c
     cdef: str  # declarations for cffi
     state_names: tuple[str, ...]
     output_names: tuple[str, ...]
     event_names: tuple[str, ...]
     param_names: tuple[str, ...]
     phases: tuple[str, ...]
+    structure_hash: str
+
+    def files(self) -> dict[str, str]:
+        """File name -> text of every emitted source."""
+        p = self.prefix
+        return {f"{p}.h": self.header, f"{p}.c": self.source,
+                f"{p}_machine.h": self.machine_header, f"{p}_machine.c": self.machine_source}
+
+
+def _c_string(text: str) -> str:
+    return text.replace("\\", "\\\\").replace('"', '\\"')
+
+
+def _range_test(f: Field, value: str) -> str:
+    """The C condition that an input lies in its table range (finite in any case)."""
+    row = f.row
+    tests = [f"isfinite({value})"]
+    if row.low != float("-inf"):
+        tests.append(f"{value} {'>' if row.low_open else '>='} {_c_double(row.low)}")
+    if row.high != float("inf"):
+        tests.append(f"{value} {'<' if row.high_open else '<='} {_c_double(row.high)}")
+    return " && ".join(tests)
 
 
 def _templates() -> jinja2.Environment:
     root = importlib.resources.files("impactgen.templates")
     loader = jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8"))
-    return jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined,
-                              keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
+    env = jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined,
+                             keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
+    env.filters.update(c_double=_c_double, c_string=_c_string, range_test=_range_test)
+    return env
 
 
 @dataclass(frozen=True)
@@ -124,7 +164,7 @@ def _kernel(model: ModelExpressions, blocks: list[CBlock], extra_code: list[str]
     text_with_trig = text + [a for _, _, a in trig]
     states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
     used_states = tuple((i, name) for i, name in states if any(_mentions(c, name) for c in text_with_trig))
-    params = tuple(name for name, _ in model.params if any(_mentions(c, name) for c in text))
+    params = tuple(f.name for f in model.params if any(_mentions(c, f.name) for c in text))
     return Kernel(used_states, params, tuple(trig), tuple(blocks))
 
 
@@ -196,7 +236,19 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
         jac = {"block": jac_block, "kernel": _kernel(model, jac_blocks), "nworks": J.works.rows,
                "udot": udot_used}
 
+    params = model.params
+    present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
     return {
+        "api_version": machine.API_VERSION,
+        "structure_hash": machine.structure_hash(model),
+        "thresholds": machine.THRESHOLDS,
+        "all_states": machine.STATES,
+        "state_laws": [(s, machine.STATE_LAW[s]) for s in machine.STATES if s in present],
+        "kind_code": {"input": 0, "derived": 1, "machine": 2},
+        "material_inputs": ("E_rod", "nu_rod", "S_y_rod", "R_tip", "E_surface", "nu_surface", "S_y_surface"),
+        "laws": machine.switch_laws(model, ccode),
+        "param_names": [f.name for f in params],
+        "cdef": False,
         "prefix": prefix,
         "PREFIX": prefix.upper(),
         "spec": spec,
@@ -248,17 +300,21 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
     model = assemble_model(spec)
     ctx = _context(model, prefix)
     env = _templates()
+    machine_decls = env.get_template("machine_decls.j2").render(ctx, cdef=True)
     return GeneratedModel(
         spec=spec,
         prefix=prefix,
         header=_tidy(env.get_template("model.h.j2").render(ctx)),
         source=_tidy(env.get_template("model.c.j2").render(ctx)),
-        cdef=_tidy(env.get_template("cdef.h.j2").render(ctx)),
+        machine_header=_tidy(env.get_template("machine.h.j2").render(ctx)),
+        machine_source=_tidy(env.get_template("machine.c.j2").render(ctx)),
+        cdef=_tidy(env.get_template("cdef.h.j2").render(ctx) + "\n" + machine_decls),
         state_names=model.state_names,
         output_names=tuple(o.name for o in model.outputs),
         event_names=tuple(e.name for e in model.events),
-        param_names=tuple(name for name, _ in model.params),
+        param_names=tuple(f.name for f in model.params),
         phases=model.phases,
+        structure_hash=ctx["structure_hash"],
     )
 
 

@@ -16,6 +16,7 @@ import sympy as sm
 
 from . import contact as law
 from .mechanics import ChainEquations, derive_chain
+from .parameters import Field, fields
 
 # Phases of MODEL.md section 4, as the C enum values, and the sustained contact that ends a
 # chattering sequence of impacts (the tip held on the surface by a constraint force).
@@ -129,7 +130,7 @@ class ModelExpressions:
     events: tuple[Named, ...]
     outputs: tuple[Named, ...]
     works: tuple[Named, ...]  # power of each contact force: integrated as extra states
-    params: tuple[tuple[str, str], ...]  # (name, doc) of every runtime parameter
+    params: tuple[Field, ...]  # the parameter struct, in order (codegen/parameters.py)
     jacobian: JacobianExpressions | None = None
 
     @property
@@ -142,24 +143,6 @@ class ModelExpressions:
     def state_names(self) -> tuple[str, ...]:
         s = self.chain.symbols
         return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works)
-
-
-PARAM_DOCS = {
-    "g": "gravity, m/s^2",
-    "y_s": "surface height, m",
-    "E_star": "reduced modulus E*, Pa (Eq. 7)",
-    "R": "reduced tip radius, m (Eq. 8)",
-    "delta_c": "critical deformation, m",
-    "P_c": "critical load, N",
-    "C_j": "critical yield coefficient",
-    "B": "Jackson-Green exponent 0.14 exp(23 S_y/E*)",
-    "delta_m": "maximum compression of the current impact, m (set by the phase machine)",
-    "delta_r": "permanent deformation, m (set at maximum compression)",
-    "R_res": "unloading radius, m (set at maximum compression)",
-    "mu": "friction coefficient",
-    "eps": "regularization speed of the friction sign, m/s",
-    "slip": "exact Coulomb: +1 or -1 while the tip slips that way, 0 while it sticks",
-}
 
 
 @lru_cache(maxsize=32)
@@ -230,21 +213,22 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     if spec.has_friction:
         works.append(Named("friction", s.F_f * TIP["v_Bx"], "power of the friction force, W"))
 
-    used: set[sm.Symbol] = set()
+    used: set[sm.Symbol] = set(machine_symbols(spec))
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction or 0]:
         used |= sm.sympify(e).free_symbols
-    order = ["g", "y_s", "E_star", "R", "delta_c", "P_c", "C_j", "B", "delta_m", "delta_r",
-             "R_res", "mu", "eps", "slip"]
-    names = {str(x) for x in used} | {"g", "y_s"}
-    params = tuple((f"L{i}", f"length of link {i}, m") for i in range(1, spec.links + 1))
-    params += tuple((f"m{i}", f"mass of link {i}, kg") for i in range(1, spec.links + 1))
-    params += tuple((k, PARAM_DOCS[k]) for k in order if k in names)
+    params = fields(spec.links, spec.friction, {str(x) for x in used})
 
     forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
     jacobian = _jacobian(chain, forcing, tuple(cases), friction, tuple(works)) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction, sign,
                             _tip_jacobian(chain) if spec.constrained else (), tuple(events),
                             tuple(outputs), tuple(works), params, jacobian)
+
+
+def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:
+    """What the phase machine's switch laws read besides the force laws: E* and R for the
+    contact scales and the unloading radius, delta_c for Eq. 12 and the yield onset."""
+    return (law.E_star, law.R) + ((law.delta_c, law.delta_r, law.R_res) if spec.plastic else ())
 
 
 def _tip_jacobian(chain: ChainEquations) -> tuple[Named, ...]:

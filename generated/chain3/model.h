@@ -55,25 +55,34 @@ enum {
 
 /* Runtime parameters: one build serves every value of these. */
 typedef struct {
-    double L1;  /* length of link 1, m */
-    double L2;  /* length of link 2, m */
-    double L3;  /* length of link 3, m */
-    double m1;  /* mass of link 1, kg */
-    double m2;  /* mass of link 2, kg */
-    double m3;  /* mass of link 3, kg */
-    double g;  /* gravity, m/s^2 */
-    double y_s;  /* surface height, m */
-    double E_star;  /* reduced modulus E*, Pa (Eq. 7) */
-    double R;  /* reduced tip radius, m (Eq. 8) */
+    double L1;  /* length of link 1, m (chain.length[1]) */
+    double L2;  /* length of link 2, m (chain.length[2]) */
+    double L3;  /* length of link 3, m (chain.length[3]) */
+    double m1;  /* mass of link 1, kg (chain.mass[1]) */
+    double m2;  /* mass of link 2, kg (chain.mass[2]) */
+    double m3;  /* mass of link 3, kg (chain.mass[3]) */
+    double g;  /* gravity, m/s2 (chain.gravity) */
+    double E_rod;  /* Young's modulus of the rod, Pa (rod.E) */
+    double nu_rod;  /* Poisson ratio of the rod (rod.nu) */
+    double S_y_rod;  /* yield strength of the rod, Pa (rod.yield_strength) */
+    double R_tip;  /* radius of the rod's spherical tip, m (rod.tip_radius) */
+    double E_surface;  /* Young's modulus of the surface, Pa (surface.E) */
+    double nu_surface;  /* Poisson ratio of the surface (surface.nu) */
+    double S_y_surface;  /* yield strength of the surface, Pa (surface.yield_strength) */
+    double surface_height;  /* height of the undeformed surface (ignored when surface.height_initial is set), m (surface.height) */
+    double surface_initial;  /* 1: the surface is at the tip's initial height (surface.height = "initial") (surface.height_initial) */
+    double mu;  /* friction coefficient (contact.friction) */
+    double eps;  /* regularization speed of the friction sign, m/s (contact.friction_eps) */
+    double E_star;  /* reduced modulus E* (Eq. 7), Pa */
+    double R;  /* reduced tip radius (Eq. 8), m */
+    double C_j;  /* critical yield coefficient */
     double delta_c;  /* critical deformation, m */
     double P_c;  /* critical load, N */
-    double C_j;  /* critical yield coefficient */
     double B;  /* Jackson-Green exponent 0.14 exp(23 S_y/E*) */
-    double delta_m;  /* maximum compression of the current impact, m (set by the phase machine) */
-    double delta_r;  /* permanent deformation, m (set at maximum compression) */
-    double R_res;  /* unloading radius, m (set at maximum compression) */
-    double mu;  /* friction coefficient */
-    double eps;  /* regularization speed of the friction sign, m/s */
+    double y_s;  /* surface level now (moves to where a resting tip lifts off), m */
+    double delta_m;  /* maximum compression of the current impact, m */
+    double delta_r;  /* permanent deformation (set at maximum compression), m */
+    double R_res;  /* unloading radius (set at maximum compression), m */
     int phase;  /* MODEL_PHASE_*: which normal-force law is active */
 } model_params;
 

@@ -62,9 +62,9 @@ static inline double normal_force(double delta, const model_params *p)
     }
     case MODEL_PHASE_ELASTOPLASTIC: {  /* Jackson-Green elasto-plastic compression (Eq. 10) */
         const double R = p->R;
+        const double C_j = p->C_j;
         const double delta_c = p->delta_c;
         const double P_c = p->P_c;
-        const double C_j = p->C_j;
         const double B = p->B;
 
         if (!(delta > 0)) return 0.0;
@@ -120,9 +120,9 @@ static double normal_force_slope(double delta, const model_params *p)
     }
     case MODEL_PHASE_ELASTOPLASTIC: {
         const double R = p->R;
+        const double C_j = p->C_j;
         const double delta_c = p->delta_c;
         const double P_c = p->P_c;
-        const double C_j = p->C_j;
         const double B = p->B;
 
         if (!(delta > 0)) return 0.0;
@@ -172,9 +172,9 @@ static int accelerations(const double *y, const model_params *p, double *udot, t
     const double m1 = p->m1;
     const double m2 = p->m2;
     const double g = p->g;
-    const double y_s = p->y_s;
     const double mu = p->mu;
     const double eps = p->eps;
+    const double y_s = p->y_s;
     const double sin_q1 = sin(q1);
     const double cos_q1 = cos(q1);
     const double sin_q2 = sin(q2);
@@ -244,8 +244,8 @@ void model_events(double t, const double *y, double *ev, const model_params *p)
     const double u2 = y[3];
     const double L1 = p->L1;
     const double L2 = p->L2;
-    const double y_s = p->y_s;
     const double delta_c = p->delta_c;
+    const double y_s = p->y_s;
     const double delta_m = p->delta_m;
     const double delta_r = p->delta_r;
     const double sin_q1 = sin(q1);
@@ -275,9 +275,9 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double m1 = p->m1;
     const double m2 = p->m2;
     const double g = p->g;
-    const double y_s = p->y_s;
     const double mu = p->mu;
     const double eps = p->eps;
+    const double y_s = p->y_s;
     const double sin_q1 = sin(q1);
     const double cos_q1 = cos(q1);
     const double sin_q2 = sin(q2);
@@ -336,9 +336,9 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     const double m1 = p->m1;
     const double m2 = p->m2;
     const double g = p->g;
-    const double y_s = p->y_s;
     const double mu = p->mu;
     const double eps = p->eps;
+    const double y_s = p->y_s;
     const double sin_q1 = sin(q1);
     const double cos_q1 = cos(q1);
     const double sin_q2 = sin(q2);

@@ -150,16 +150,16 @@ def _first_error(log: str) -> str:
 
 
 def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir: Path) -> Path:
-    (workdir / "model.c").write_text(gen.source)
-    (workdir / "model.h").write_text(gen.header)
+    for name, text in gen.files().items():
+        (workdir / name).write_text(text)
     for name in GLUE_FILES:
         (workdir / name).write_text(_native(name))
     ffi = cffi.FFI()
     ffi.cdef(gen.cdef + _glue_cdef())
     ffi.set_source(
         module_name,
-        '#include "model.h"\n#include "cvode_glue.h"\n',
-        sources=[str(workdir / name) for name in ("model.c", *GLUE_FILES) if name.endswith(".c")],
+        '#include "model.h"\n#include "model_machine.h"\n#include "cvode_glue.h"\n',
+        sources=[str(workdir / name) for name in (*gen.files(), *GLUE_FILES) if name.endswith(".c")],
         include_dirs=[str(workdir), *sundials.include_dirs],
         library_dirs=list(sundials.library_dirs),
         runtime_library_dirs=list(sundials.library_dirs),
@@ -225,6 +225,7 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
             "event_names": gen.event_names,
             "param_names": gen.param_names,
             "phases": gen.phases,
+            "structure_hash": gen.structure_hash,
         }
         for junk in work.iterdir():  # keep the sources, the library and the manifest only
             if junk.is_dir():

@@ -226,14 +226,14 @@ def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
     elapsed = time.perf_counter() - started
     try:
         out.mkdir(parents=True, exist_ok=True)
-        (out / f"{prefix}.h").write_text(gen.header)
-        (out / f"{prefix}.c").write_text(gen.source)
+        for name, text in gen.files().items():
+            (out / name).write_text(text)
         if write_scene:
             (out / "scene.toml").write_text(scene.to_toml())
     except OSError as exc:
         raise SceneError("--out", f"cannot write to {out}: {exc}") from None
-    print(f"{spec.slug}: {out / (prefix + '.h')}, {out / (prefix + '.c')} "
-          f"(plain C99, link with -lm)")
+    print(f"{spec.slug}: {', '.join(str(out / name) for name in gen.files())} "
+          f"(plain C99: the model and its phase machine; link with -lm)")
     if write_scene:
         print(f"scene: {out / 'scene.toml'} (simulate it: impactgen run {out / 'scene.toml'})")
     print(f"compiled with CVODE: {compiled.path} ({elapsed:.1f} s)")

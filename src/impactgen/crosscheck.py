@@ -187,22 +187,24 @@ def rhs_pair(scene: Scene, phase: str, y: np.ndarray, delta_m: float) -> tuple[n
     """The C right-hand side (through cffi) and the reference's, at state y in `phase`,
     with the restitution state set as at a maximum compression delta_m."""
     from .build import compile_model
-    from .contact_constants import RESIDUAL_LAWS, contact_constants, unloading_radius
     from .engines import model_spec
-    from .phases import fill_params, set_params
+    from .laws import contact_constants, residual_deformation, unloading_radius
+    from .model_params import params_at_start
     from .reference import ReferenceModel
 
     model = compile_model(model_spec(scene))
+    ffi = model.ffi
     consts = contact_constants(scene)
-    params = fill_params(model, scene, consts)
+    params = params_at_start(model, scene)
     ref = ReferenceModel.from_scene(scene)
     P_m = ref.contact.normal_force("elastoplastic" if ref.contact.plastic else "elastic", delta_m)
     ref.contact.at_maximum_compression(delta_m, P_m)
-    delta_r = RESIDUAL_LAWS["marghitu-zhao"](delta_m, consts.delta_c)
-    set_params(model, params, delta_m=delta_m, delta_r=delta_r,
-               R_res=unloading_radius(P_m, delta_m, delta_r, consts.E_star))
+    delta_r = residual_deformation(delta_m, consts.delta_c)
+    params.delta_m = delta_m
+    if "R_res" in model.param_names:
+        params.delta_r = delta_r
+        params.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
     params.phase = PHASE_LAWS.index(phase)
-    ffi = model.ffi
     y_c = ffi.new("double[]", [float(v) for v in y])
     ydot = ffi.new("double[]", len(y))
     flag = model.lib.model_rhs(0.0, y_c, ydot, params)

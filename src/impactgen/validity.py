@@ -17,19 +17,13 @@ Checked per impact from what was recorded at maximum compression:
 """
 from __future__ import annotations
 
-import math
 
-from .contact_constants import YIELD_ONSET, contact_constants
+from .codegen.machine import THRESHOLD
+from .laws import YIELD_ONSET, contact_constants, contact_radius
 from .scene import Scene
 
 JACKSON_GREEN_MAX_W = 110.0
-
-
-def contact_radius(delta: float, R: float, delta_c: float, B: float) -> float:
-    return math.sqrt(R * delta * (delta / (YIELD_ONSET * delta_c)) ** B)
-
-
-CHATTER_RATIO = 2.0  # flight shorter than this many contact times
+CHATTER_RATIO = THRESHOLD["CHATTER_RATIO"]  # flight shorter than this many contact times (as the machine)
 
 
 def chattering(before, now) -> bool:
@@ -69,7 +63,7 @@ def validity_warnings(scene: Scene, impacts) -> list[str]:
     for k, impact in enumerate(impacts, start=1):
         w = impact.delta_max / c.delta_c
         if impact.delta_max >= YIELD_ONSET * c.delta_c:
-            a = contact_radius(impact.delta_max, c.R, c.delta_c, c.B)
+            a = contact_radius(impact.delta_max, c)
             if a >= c.R:
                 found.setdefault("radius", []).append(
                     (k, f"contact radius a = {a:.3g} m reaches the tip radius {c.R:.3g} m; "

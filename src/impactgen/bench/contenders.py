@@ -20,14 +20,15 @@ import numpy as np
 
 from .. import reference
 from ..build import compile_model
-from ..contact_constants import contact_constants
+from ..codegen.expressions import PHASES
+from ..codegen.machine import STATE_LAW
 from ..engines import model_spec, simulate
-from ..phases import LAW_CODE, fill_params, phase_rules, set_params
+from ..model_params import params_at_start
 from ..reference import ReferenceModel, Segment
 from ..results import SimulationResult
 from ..scene import Scene
 
-RULES = phase_rules(plastic=True)  # which force law each phase uses (reloading: restitution's)
+LAW_CODE = {state: PHASES.index(law) for state, law in STATE_LAW.items()}  # params.phase per state
 
 
 class BudgetExceeded(RuntimeError):
@@ -76,15 +77,15 @@ class CompiledRhsModel(ReferenceModel):
         base = ReferenceModel.from_scene(scene)
         model = cls(base.chain, base.contact, base.n, base.friction_state)
         model.compiled = compile_model(model_spec(scene))
-        model.params = fill_params(model.compiled, scene, contact_constants(scene))
+        model.params = params_at_start(model.compiled, scene)
         model.ydot = np.empty(model.compiled.nstate)
         model.ydot_c = model.compiled.ffi.cast("double *", model.ydot.ctypes.data)
         return model
 
     def rhs(self, t: float, y: np.ndarray, phase: str) -> np.ndarray:
         c, ffi = self.contact, self.compiled.ffi
-        self.params.phase = LAW_CODE[RULES[phase].law]
-        set_params(self.compiled, self.params, delta_m=c.delta_m, delta_r=c.delta_r, R_res=c.R_res)
+        self.params.phase = LAW_CODE[phase]
+        self.params.delta_m, self.params.delta_r, self.params.R_res = c.delta_m, c.delta_r, c.R_res
         y = np.ascontiguousarray(y, dtype=float)
         self.compiled.lib.model_rhs(t, ffi.cast("double *", y.ctypes.data), self.ydot_c, self.params)
         return self.ydot.copy()

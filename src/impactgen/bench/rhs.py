@@ -16,8 +16,7 @@ import numpy as np
 from ..build import compile_model
 from ..codegen.emit import generate_model
 from ..codegen.expressions import ModelSpec
-from ..contact_constants import contact_constants
-from ..phases import fill_params
+from ..model_params import params_at_start
 from ..reference import ReferenceModel
 from ..scene import steel_chain_scene
 
@@ -86,9 +85,8 @@ def rhs_benchmark(links: tuple[int, ...]) -> list[dict]:
         model = compile_model(spec)
         y, y_s = _state(scene)
         scene = dataclasses.replace(scene, surface_height=y_s)  # in contact on purpose: no start checks
-        params = fill_params(model, scene, contact_constants(scene))
-        from ..phases import set_params
-        set_params(model, params, delta_m=2.0e-5, delta_r=5.0e-6, R_res=0.0084)  # a restitution state
+        params = params_at_start(model, scene)
+        params.delta_m, params.delta_r, params.R_res = 2.0e-5, 5.0e-6, 0.0084  # a restitution state
         params.phase = 2
         params_source = " ".join(f"p.{name} = {getattr(params, name)!r};" for name in model.param_names)
         c_ns = {f"c_{law}_ns": c_from_c(spec, params_source + f" p.phase = {code};", y)

@@ -1,0 +1,86 @@
+"""Stage 5b of the pipeline: what the C phase machine is printed from.
+
+The phase machine of MODEL section 4 (which force law and which events with directions in
+each machine state, what is recorded at each switch) is C, generated beside the model from
+templates/machine.c.j2. Its switch laws (Eq. 12, the unloading radius, the yield onset) and
+the derived material constants come from the sympy expressions of contact.py, as the force
+laws do; its thresholds are named here and printed as #defines, so Python code that needs
+one (validity warnings, safety checks) reads the same number.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+
+import sympy as sm
+
+from . import contact as law
+from .expressions import ModelExpressions
+
+API_VERSION = 1  # the C API of model.h and model_machine.h: bumped when a signature changes
+
+# Machine states: contact phases, plus reloading (restitution's law, watching delta_m).
+STATES = ("free", "elastic", "elastoplastic", "restitution", "reloading", "sustained")
+STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplastic",
+             "restitution": "restitution", "reloading": "restitution", "sustained": "sustained"}
+
+
+@dataclass(frozen=True)
+class Threshold:
+    name: str
+    value: float
+    doc: str
+
+
+THRESHOLDS = (
+    Threshold("TOUCH_TOLERANCE", 1e-12,
+              "a tip this far below the surface, relative to the chain's length (at least 1 m), "
+              "still touches it at the start: the rounding of a height summed over the links"),
+    Threshold("TANGENTIAL_TOLERANCE", 1e-12,
+              "d(delta)/dt or v_Bx below this fraction of the tip speed is rounding: zero"),
+    Threshold("STOPPED_TOLERANCE", 1e-9,
+              "a slipping tip whose v_Bx has fallen below this fraction of its speed has stopped"),
+    Threshold("CHATTER_RATIO", 2.0,
+              "impacts chatter when a flight is shorter than this many contact times"),
+    Threshold("ANGLE_RESOLUTION", 1e-2,
+              "inside an impact the angles are resolved to this fraction of the expected "
+              "penetration (over the chain's length)"),
+    Threshold("ANGLE_ATOL_FLOOR", 1e-15,
+              "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
+)
+THRESHOLD = {t.name: t.value for t in THRESHOLDS}
+
+
+@dataclass(frozen=True)
+class SwitchLaws:
+    """The laws the machine applies at switches, printed as C expressions."""
+
+    derive: tuple[tuple[str, str], ...]  # (name, C) steps from the materials to the constants
+    residual: str | None  # delta_r from delta_max (Eq. 12), three-phase only
+    unloading_radius: str | None  # R_res from delta_max, P_m, delta_r
+    yielded: str | None  # reloading past delta_m returns to the elasto-plastic law
+    yield_onset: str | None
+
+
+def switch_laws(model: ModelExpressions, ccode) -> SwitchLaws:
+    derive = tuple((str(name), ccode(expr)) for name, expr in law.material_constants())
+    if not model.spec.plastic:
+        return SwitchLaws(derive, None, None, None, None)
+    delta_m = sm.Symbol("delta_m")
+    return SwitchLaws(
+        derive,
+        residual=ccode(law.residual_deformation()),
+        unloading_radius=ccode(law.unloading_radius()),
+        yielded=ccode(sm.GreaterThan(delta_m, law.YIELD_ONSET * law.delta_c)),
+        yield_onset=ccode(law.YIELD_ONSET),
+    )
+
+
+def structure_hash(model: ModelExpressions) -> str:
+    """A hash of everything an embedder's code depends on: the spec and the names and order
+    of the states, parameters, events, outputs and machine states."""
+    facts = {"api": API_VERSION, "spec": model.spec.to_json(), "states": model.state_names,
+             "params": [f.name for f in model.params], "events": [e.name for e in model.events],
+             "outputs": [o.name for o in model.outputs], "machine": STATES}
+    return hashlib.sha256(json.dumps(facts, sort_keys=True).encode()).hexdigest()[:16]

@@ -1,0 +1,146 @@
+"""The runtime parameters of a generated model: one table, read by everything that names them.
+
+Each row says what a parameter is (C field and sympy symbol `name`, unit, description), how a
+scene sets it (`key`, its dotted scene key, and `read`), who sets it (`kind`) and its FMI
+causality. The C parameter struct, the filling from a scene, the FMU's modelDescription.xml,
+the bounds the C checks and the parameter table of docs/embedding.md are all printed from
+this table, so the names never have to agree by string.
+
+Kinds:
+- "input": the scene sets it (an FMI parameter);
+- "derived": computed from the inputs by `<prefix>_derive` (E*, delta_c, ...: an FMI
+  calculatedParameter), with the sympy expressions of codegen/contact.py;
+- "machine": set by the phase machine as the impact goes on (delta_m, delta_r, R_res, ...).
+
+A per-link row (`per_link`) stands for n fields: `L1`, `L2`, ... and `chain.length[1]`, ...
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+INF = math.inf
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str  # C field, sympy symbol; per-link rows append the link number
+    key: str  # scene key; per-link rows end in "[{i}]"
+    unit: str
+    doc: str
+    kind: str  # "input" | "derived" | "machine"
+    needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "used"
+    per_link: bool = False
+    read: Callable[[Any, int], float] | None = None  # (scene, link index from 0) -> value
+    low: float = -INF  # physical range of an input, for the C check (fmi2SetReal)
+    high: float = INF
+    low_open: bool = False  # the range excludes `low`
+    high_open: bool = False
+    fmi_type: str = "Real"  # "Real" | "Boolean"
+
+    def names(self, links: int) -> list[tuple[str, str, int]]:
+        """(C name, scene key, link index) of each field the row stands for."""
+        if not self.per_link:
+            return [(self.name, self.key, 0)]
+        return [(f"{self.name}{i}", self.key.format(i=i), i - 1) for i in range(1, links + 1)]
+
+    def range_text(self) -> str:
+        if self.low == -INF and self.high == INF:
+            return ""
+        lo = "" if self.low == -INF else ("(" if self.low_open else "[") + f"{self.low:g}"
+        hi = "" if self.high == INF else f"{self.high:g}" + (")" if self.high_open else "]")
+        if not hi:
+            return f"> {self.low:g}" if self.low_open else f">= {self.low:g}"
+        if not lo:
+            return f"< {self.high:g}" if self.high_open else f"<= {self.high:g}"
+        return f"{lo}, {hi}"
+
+
+POSITIVE = {"low": 0.0, "low_open": True}
+POISSON = {"low": -1.0, "high": 0.5, "low_open": True, "high_open": True}
+
+PARAMETERS: tuple[Parameter, ...] = (
+    Parameter("L", "chain.length[{i}]", "m", "length of link {i}", "input", per_link=True,
+              read=lambda s, i: s.chain.length[i], **POSITIVE),
+    Parameter("m", "chain.mass[{i}]", "kg", "mass of link {i}", "input", per_link=True,
+              read=lambda s, i: s.chain.mass[i], **POSITIVE),
+    Parameter("g", "chain.gravity", "m/s2", "gravity", "input", read=lambda s, i: s.chain.gravity, low=0.0),
+    Parameter("E_rod", "rod.E", "Pa", "Young's modulus of the rod", "input",
+              read=lambda s, i: s.rod.E, **POSITIVE),
+    Parameter("nu_rod", "rod.nu", "1", "Poisson ratio of the rod", "input",
+              read=lambda s, i: s.rod.nu, **POISSON),
+    Parameter("S_y_rod", "rod.yield_strength", "Pa", "yield strength of the rod", "input",
+              read=lambda s, i: s.rod.yield_strength, **POSITIVE),
+    Parameter("R_tip", "rod.tip_radius", "m", "radius of the rod's spherical tip", "input",
+              read=lambda s, i: s.tip_radius, **POSITIVE),
+    Parameter("E_surface", "surface.E", "Pa", "Young's modulus of the surface", "input",
+              read=lambda s, i: s.surface.E, **POSITIVE),
+    Parameter("nu_surface", "surface.nu", "1", "Poisson ratio of the surface", "input",
+              read=lambda s, i: s.surface.nu, **POISSON),
+    Parameter("S_y_surface", "surface.yield_strength", "Pa", "yield strength of the surface", "input",
+              read=lambda s, i: s.surface.yield_strength, **POSITIVE),
+    Parameter("surface_height", "surface.height", "m",
+              "height of the undeformed surface (ignored when surface.height_initial is set)", "input",
+              read=lambda s, i: 0.0 if s.surface_height is None else s.surface_height),
+    Parameter("surface_initial", "surface.height_initial", "",
+              "1: the surface is at the tip's initial height (surface.height = \"initial\")", "input",
+              read=lambda s, i: 1.0 if s.surface_height is None else 0.0, low=0.0, high=1.0,
+              fmi_type="Boolean"),
+    Parameter("mu", "contact.friction", "1", "friction coefficient", "input", needs="friction",
+              read=lambda s, i: s.contact.friction, low=0.0),
+    Parameter("eps", "contact.friction_eps", "m/s", "regularization speed of the friction sign", "input",
+              needs="regularized", read=lambda s, i: s.contact.friction_eps, **POSITIVE),
+    Parameter("E_star", "", "Pa", "reduced modulus E* (Eq. 7)", "derived", needs="used"),
+    Parameter("R", "", "m", "reduced tip radius (Eq. 8)", "derived", needs="used"),
+    Parameter("C_j", "", "1", "critical yield coefficient", "derived", needs="used"),
+    Parameter("delta_c", "", "m", "critical deformation", "derived", needs="used"),
+    Parameter("P_c", "", "N", "critical load", "derived", needs="used"),
+    Parameter("B", "", "1", "Jackson-Green exponent 0.14 exp(23 S_y/E*)", "derived", needs="used"),
+    Parameter("y_s", "", "m", "surface level now (moves to where a resting tip lifts off)", "machine"),
+    Parameter("delta_m", "", "m", "maximum compression of the current impact", "machine", needs="used"),
+    Parameter("delta_r", "", "m", "permanent deformation (set at maximum compression)", "machine",
+              needs="used"),
+    Parameter("R_res", "", "m", "unloading radius (set at maximum compression)", "machine", needs="used"),
+    Parameter("slip", "", "1", "exact Coulomb: +1 or -1 while the tip slips that way, 0 while it sticks",
+              "machine", needs="coulomb"),
+)
+
+BY_NAME = {p.name: p for p in PARAMETERS}
+
+
+def included(p: Parameter, friction: str, used: set[str]) -> bool:
+    """Whether a model with this friction kind, whose expressions read `used`, has row `p`."""
+    if p.needs == "always":
+        return True
+    if p.needs == "friction":
+        return friction != "none"
+    if p.needs in ("regularized", "coulomb"):
+        return friction == p.needs
+    return p.name in used
+
+
+@dataclass(frozen=True)
+class Field:
+    """One field of a model's parameter struct: a table row, for one link if per-link."""
+
+    name: str  # C field
+    key: str  # scene key ("" for derived and machine fields)
+    row: Parameter
+    link: int  # link index from 0 (0 for rows that are not per-link)
+
+    @property
+    def doc(self) -> str:
+        text = self.row.doc.format(i=self.link + 1)
+        return f"{text}, {self.row.unit}" if self.row.unit not in ("", "1") else text
+
+    def read(self, scene: Any) -> float:
+        assert self.row.read is not None, f"{self.name} is not set by a scene"
+        return float(self.row.read(scene, self.link))
+
+
+def fields(links: int, friction: str, used: set[str]) -> tuple[Field, ...]:
+    """The parameter struct of a model with `links` links and this friction kind, whose
+    expressions (force laws, events, switch laws) read the symbols named in `used`."""
+    return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction, used)
+                 for name, key, link in p.names(links))
