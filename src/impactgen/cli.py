@@ -215,7 +215,7 @@ def _overrides(items: list[str]) -> dict:
 
 def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
     from .build import compile_model
-    from .codegen.emit import generate_model
+    from .codegen.emit import generate_model, generate_scene_header
     from .engines import model_spec
     if not prefix.isidentifier() or not prefix.isascii():
         raise SceneError("--prefix", f"{prefix!r} is not a C identifier")
@@ -228,12 +228,14 @@ def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
         out.mkdir(parents=True, exist_ok=True)
         for name, text in gen.files().items():
             (out / name).write_text(text)
+        (out / f"{prefix}_scene.h").write_text(generate_scene_header(gen, scene))
         if write_scene:
             (out / "scene.toml").write_text(scene.to_toml())
     except OSError as exc:
         raise SceneError("--out", f"cannot write to {out}: {exc}") from None
     print(f"{spec.slug}: {', '.join(str(out / name) for name in gen.files())} "
-          f"(plain C99: the model and its phase machine; link with -lm)")
+          f"(plain C99: the model and its phase machine; link with -lm), and the scene's values "
+          f"in {out / (prefix + '_scene.h')}")
     if write_scene:
         print(f"scene: {out / 'scene.toml'} (simulate it: impactgen run {out / 'scene.toml'})")
     print(f"compiled with CVODE: {compiled.path} ({elapsed:.1f} s)")

@@ -22,11 +22,17 @@ def input_fields(param_names: tuple[str, ...], links: int) -> tuple[Field, ...]:
     return tuple(by_name[name] for name in param_names if name in by_name)
 
 
+@lru_cache(maxsize=64)
+def _readers(param_names: tuple[str, ...], links: int) -> tuple[tuple[str, object, int], ...]:
+    """(field, reader, link) of each input: the loop of `fill_params`, made once per model."""
+    return tuple((f.name, f.row.read, f.link) for f in input_fields(param_names, links))
+
+
 def fill_params(model: CompiledModel, scene: Scene):
     """A new `model_params` for `scene`: its inputs, then the derived constants."""
     params = model.ffi.new("model_params *")
-    for f in input_fields(model.param_names, model.spec.links):
-        setattr(params, f.name, f.read(scene))
+    for name, read, link in _readers(model.param_names, model.spec.links):
+        setattr(params, name, read(scene, link))
     derive(model, params)
     return params
 

@@ -35,7 +35,7 @@ class Machine:
         self.lib, ffi = model.lib, model.ffi
         self.state = ffi.new("model_machine *")
         self.atol_now = ffi.new("double[]", model.nstate)
-        self.names = [ffi.string(self.lib.model_machine_state_name(k)).decode() for k in range(len(STATES))]
+        self.names = STATES  # the C enum follows codegen.machine.STATES
         self.coulomb = model.spec.coulomb
 
     @property
