@@ -144,3 +144,17 @@ def fields(links: int, friction: str, used: set[str]) -> tuple[Field, ...]:
     expressions (force laws, events, switch laws) read the symbols named in `used`."""
     return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction, used)
                  for name, key, link in p.names(links))
+
+
+def markdown_table() -> str:
+    """The table as docs/embedding.md shows it (a test keeps the two equal)."""
+    kinds = {"input": "scene", "derived": "derived", "machine": "machine"}
+    rows = ["| C field | scene key / FMU variable | unit | set by | range | what |", "|---|---|---|---|---|---|"]
+    for p in PARAMETERS:
+        name = f"{p.name}1..{p.name}n" if p.per_link else p.name
+        key = p.key.replace("{i}", "i") if p.key else ""
+        when = {"always": "", "friction": " (with friction)", "regularized": " (regularized friction)",
+                "coulomb": "", "used": ""}[p.needs]
+        rows.append(f"| `{name}` | {f'`{key}`' if key else ''} | {p.unit if p.unit not in ('', '1') else '-'} | "
+                    f"{kinds[p.kind]} | {p.range_text()} | {p.doc.replace('{i}', 'i')}{when} |")
+    return "\n".join(rows)

@@ -38,6 +38,35 @@ ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$w
     $sundials -lm -o "$work/kernels"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/kernels"
 
+echo "sanitize: the phase machine in the pure-C driver, and the FMI glue driven as an importer would"
+"$PY" - "$work" <<'PY'
+import sys
+from pathlib import Path
+import impactgen
+from impactgen.codegen.emit import generate_model, generate_scene_header
+from impactgen.engines import model_spec
+from impactgen.fmu.package import fmu_sources
+work = Path(sys.argv[1])
+scene = impactgen.load_scene("paper")
+driver = work / "driver_model"
+driver.mkdir()
+gen = generate_model(model_spec(scene))
+for name, text in {**gen.files(), "model_scene.h": generate_scene_header(gen, scene)}.items():
+    (driver / name).write_text(text)
+fmu = work / "fmu"
+fmu.mkdir()
+for name, text in fmu_sources(scene, "both").files.items():
+    (fmu / name).write_text(text)
+PY
+SAN="-std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined"
+"$CC" $SAN -I"$work/driver_model" -Isrc/impactgen/native examples/c/impact_driver.c "$work/driver_model/model.c" \
+    "$work/driver_model/model_machine.c" src/impactgen/native/cvode_glue.c src/impactgen/native/small_kernels.c \
+    $sundials -lm -o "$work/impact_driver"
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/impact_driver" > /dev/null
+"$CC" $SAN -DFMU_MODEL_EXCHANGE -DFMU_CO_SIMULATION -I"$work/fmu" "$work"/fmu/*.c tests/c/fmu_driver.c \
+    $sundials -lm -o "$work/fmu_driver"
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/fmu_driver"
+
 echo "sanitize: 2/2 simulation tests with the instrumented extension"
 asan=$("$CC" -print-file-name=libasan.so)
 export IMPACTGEN_SANITIZE=1 IMPACTGEN_CACHE_DIR="$work/cache"

@@ -43,4 +43,4 @@ if [ ! -x "$VENV/bin/python" ]; then
     "$PYTHON" -m venv "$VENV"
 fi
 echo "setup: installing impactgen with its test, plot, sweep and benchmark extras into $VENV"
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[test,plot,sweep,bench]"
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[test,plot,sweep,bench,fmu]"

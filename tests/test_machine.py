@@ -123,3 +123,11 @@ def test_free_flight_and_impact_tolerances(paper_scene):
     probe.lib.model_machine_atol(probe.m, probe.params, 1e-8, 1e-12, atol)
     assert atol[0] == pytest.approx(1e-15)  # floored at the double precision of a tip height
     assert np.all(np.array(list(atol)) <= np.array([1e-12] * 4 + [np.inf] * 2))
+
+
+def test_the_embedding_guide_lists_the_parameter_table():
+    from pathlib import Path
+    from impactgen.codegen.parameters import markdown_table
+    text = (Path(__file__).resolve().parents[1] / "docs" / "embedding.md").read_text()
+    shown = text.split("<!-- parameters:begin -->\n")[1].split("\n<!-- parameters:end -->")[0]
+    assert shown == markdown_table(), "regenerate the table in docs/embedding.md from codegen/parameters.py"

@@ -56,5 +56,6 @@ def test_glue_and_simulations_are_clean_under_sanitizers():
     output = res.stdout + res.stderr
     assert res.returncode == 0, output[-4000:]
     assert "ok (0 failures)" in output
+    assert "fmu ok (0 failures)" in output  # the FMI glue, driven as an importer would
     assert "AddressSanitizer" not in output and "runtime error" not in output
     assert "sanitize: clean" in output

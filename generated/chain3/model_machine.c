@@ -538,7 +538,11 @@ void model_machine_atol(const model_machine *m, const model_params *p, double rt
 
 void model_machine_sides(model_machine *m, const double *ev)
 {
-    for (int e = 0; e < MODEL_NEVENT; ++e) m->side[e] = ev[e] > 0.0 ? 1.0 : (ev[e] < 0.0 ? -1.0 : 0.0);
+    /* exactly on zero, a function keeps the side it came from: reaching zero in the watched
+     * direction is the crossing (an importer's located root can land exactly on it) */
+    for (int e = 0; e < MODEL_NEVENT; ++e) {
+        if (ev[e] != 0.0) m->side[e] = ev[e] > 0.0 ? 1.0 : -1.0;
+    }
 }
 
 int model_machine_crossed(const model_machine *m, const double *ev, int *fired)

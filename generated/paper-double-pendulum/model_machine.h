@@ -91,7 +91,7 @@ typedef struct {
     double t_end;       /* its end, s (NaN while it lasts) */
     double t_prev_start, t_prev_end;  /* the impact before it */
     double scale[MODEL_NSTATE];  /* typical size of each state in this impact (nominals) */
-    double side[MODEL_NEVENT];   /* last side of each event function (0: not yet left zero) */
+    double side[MODEL_NEVENT];   /* last nonzero side of each event function (0: none yet) */
 } model_machine;
 
 /* Parameters by index k < MODEL_NPARAM: the struct field, its scene key ("" when the
@@ -131,9 +131,11 @@ int model_machine_constrained(const model_machine *m);
  * impact to its own scales. */
 void model_machine_atol(const model_machine *m, const model_params *p, double rtol,
                         double atol, double *atol_out);
-/* For integrators without directional root finding: store the side of every event function
- * at a (re)start, then after each step flag in fired[k] the watched events that crossed in
- * their direction (an exact 0 counts as crossed). Returns how many crossed. */
+/* For integrators without directional root finding (FMI importers, fixed-step loops): after
+ * each accepted step, model_machine_crossed flags in fired[k] the watched events whose
+ * function crossed in their direction since the sides were stored (an exact 0 counts as
+ * crossed) and returns how many; when none did, or after the switch, store the sides with
+ * model_machine_sides. model_machine_start stores none: call it once at the start. */
 void model_machine_sides(model_machine *m, const double *ev);
 int model_machine_crossed(const model_machine *m, const double *ev, int *fired);
 /* The name of a machine state ("free", "elastic", ...). */

@@ -32,10 +32,24 @@ class Sundials:
     include_dirs: tuple[str, ...]  # SUNDIALS' own first, then MPI's if its headers need mpi.h
     library_dirs: tuple[str, ...]  # empty: the compiler's default search path
     libraries: tuple[str, ...]  # in link order
+    lib_dir: str = ""  # where the libraries were found (system folders included)
 
     @property
     def major(self) -> int:
         return int(self.version.split(".")[0])
+
+    def static_libraries(self) -> list[str] | None:
+        """The static archives (lib*.a) of the SUNDIALS libraries, in link order, for a
+        shared object that must carry CVODE inside (an FMU); None when one is missing."""
+        found = []
+        for lib in self.libraries:
+            if not lib.startswith("sundials_"):
+                continue  # MPI and friends stay dynamic
+            path = Path(self.lib_dir) / f"lib{lib}.a"
+            if not path.is_file():
+                return None
+            found.append(str(path))
+        return found
 
     def cc_args(self) -> list[str]:
         """-I, -L, rpath and -l flags for a plain compiler command (test drivers, scripts)."""
@@ -138,6 +152,6 @@ def find_sundials() -> Sundials:
             include_dirs += mpi[0]
             library_dirs += [d for d in mpi[1] if d not in library_dirs]
             libs += mpi[2]
-        return Sundials(version, tuple(include_dirs), tuple(library_dirs), tuple(libs))
+        return Sundials(version, tuple(include_dirs), tuple(library_dirs), tuple(libs), str(lib_dir))
     raise BuildError(f"SUNDIALS CVODE not found (looked for cvode/cvode.h under "
                      f"{', '.join(dict.fromkeys(looked))}); {INSTALL_HINT}")

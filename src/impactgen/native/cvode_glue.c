@@ -323,6 +323,16 @@ static int write_dense(ig_solver *s, double t, double *out)
     return failed ? -1 : 0;
 }
 
+int ig_interpolate(ig_solver *s, double t, double *y)
+{
+    if (CVodeGetDky(s->cvode, t, 0, s->dky) != CV_SUCCESS) {
+        set_message(s, "ig_interpolate: t lies outside the last step");
+        return IG_ERR_USAGE;
+    }
+    memcpy(y, N_VGetArrayPointer(s->dky), sizeof(double) * MODEL_NSTATE);
+    return 0;
+}
+
 int ig_dense_terms(const ig_solver *s)
 {
     return s->dense_terms;

@@ -74,6 +74,11 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
 int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense_buf,
                        int capacity, int *n_written, int *roots_found);
 
+/* The state at time t within the last step taken (CVODE's interpolating polynomial): for a
+ * caller that must report the state at times the integrator stepped over (co-simulation
+ * communication points). Returns 0, or IG_ERR_USAGE when t lies outside the last step. */
+int ig_interpolate(ig_solver *s, double t, double *y);
+
 /* Rows of Taylor coefficients per sample of dense output (the method's max order + 1). */
 int ig_dense_terms(const ig_solver *s);
 

@@ -1,0 +1,211 @@
+"""FMI 2.0 export, checked by an importer nobody here wrote: FMPy validates and simulates the
+FMUs (Model Exchange with FMPy's own CVODE, Co-Simulation with CVODE inside), and they agree
+with `impactgen run`."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import impactgen
+from impactgen.fmu import build_fmu
+
+fmpy = pytest.importorskip("fmpy")
+from fmpy import read_model_description, simulate_fmu  # noqa: E402
+from fmpy.fmi2 import FMU2Model, FMU2Slave  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+RTOL = 1e-10
+CASES = {"paper": 1e-3, "chain3-free-flight": 0.486}  # scene: stop time past its first impact
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("fmu")
+    return {name: build_fmu(impactgen.load_scene(name), folder / f"{name}.fmu") for name in CASES}
+
+
+class EventLog:
+    """The FMU's logEvents messages, "t = ...: from -> to", as (t, from, to)."""
+
+    def __init__(self):
+        self.events: list[tuple[float, str, str]] = []
+        self.errors: list[str] = []
+
+    def __call__(self, env, instance, status, category, message):
+        text = message.decode()
+        if category == b"logEvents":
+            t, _, change = text.partition(": ")
+            a, _, b = change.partition(" -> ")
+            self.events.append((float(t.split("=")[1]), a, b))
+        elif status >= 3:
+            self.errors.append(text)
+
+
+def run_fmu(path: Path, kind: str, stop: float, interval: float | None = None, **kw):
+    log = EventLog()
+    md = read_model_description(str(path))
+    wanted = [v.name for v in md.modelVariables if v.causality == "output" or v.name[0] in "quW"]
+    result = simulate_fmu(str(path), fmi_type=kind, stop_time=stop, relative_tolerance=RTOL,
+                          output_interval=interval or stop / 100, debug_logging=True, logger=log,
+                          output=wanted, **kw)
+    return result, log
+
+
+def test_fmu_validates_and_exports_only_fmi2(fmus, tmp_path):
+    path = fmus["paper"]
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    names = {v.name for v in md.modelVariables}
+    assert {"chain.length[1]", "rod.E", "contact.friction", "initial.u[2]", "surface.height_initial",
+            "q[1]", "u[2]", "W_normal", "delta", "F", "F_f", "v_B[1]", "v_B[2]", "T[1]", "T", "V",
+            "phase", "impacts", "delta_max", "delta_r", "P_max"} <= names
+    with zipfile.ZipFile(path) as z:
+        so = [n for n in z.namelist() if n.startswith("binaries/") and n.endswith(".so")][0]
+        z.extract(so, tmp_path)
+        assert "sources/buildDescription.xml" in z.namelist()
+    binary = str(tmp_path / so)
+    symbols = subprocess.run(["nm", "-D", "--defined-only", binary], capture_output=True, text=True,
+                             check=True).stdout.split("\n")
+    exported = [line.split()[-1] for line in symbols if line.strip()]
+    assert exported and all(name.startswith("fmi2") for name in exported), exported
+    if shutil.which("ldd"):
+        assert "sundials" not in subprocess.run(["ldd", binary], capture_output=True, text=True).stdout
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("name", list(CASES))
+def test_fmu_agrees_with_impactgen_run(fmus, name, kind):
+    stop = CASES[name]
+    result, log = run_fmu(fmus[name], kind, stop)
+    assert log.errors == []
+    run = impactgen.simulate(impactgen.load_scene(name), t_end=stop)
+    impact = run.impacts[0]
+    last = result[-1]
+    for field in ("delta_max", "delta_r", "P_max"):
+        assert last[field] == pytest.approx(getattr(impact, field), rel=1e-6), field
+    n = run.scene.n
+    for i in range(n):
+        assert last[f"u[{i + 1}]"] == pytest.approx(run.u[i, -1], rel=1e-6)
+        assert last[f"q[{i + 1}]"] == pytest.approx(run.q[i, -1], rel=1e-6)
+    assert last["W_normal"] == pytest.approx(run.W_normal[-1], rel=1e-6)
+    assert last["W_friction"] == pytest.approx(run.W_friction[-1], rel=1e-6)
+    assert last["impacts"] == len(run.impacts)
+    # the same phases, switching within 1e-9 s of each other
+    expected = [(impact.t_start, "free", "elastic")] if impact.t_start > 0 else []
+    expected += impact.switches
+    assert [(a, b) for _, a, b in log.events] == [(a, b) for _, a, b in expected]
+    np.testing.assert_allclose([t for t, _, _ in log.events], [t for t, _, _ in expected], rtol=0, atol=1e-9)
+
+
+def test_co_simulation_steps_do_not_change_the_answer(fmus):
+    fine, fine_log = run_fmu(fmus["paper"], "CoSimulation", 0.05, interval=1e-3)
+    coarse, coarse_log = run_fmu(fmus["paper"], "CoSimulation", 0.05, interval=1e-2)
+    assert fine_log.events == coarse_log.events  # the integrator steps across communication points
+    for field in ("u[1]", "u[2]", "q[1]", "W_normal", "delta_max", "impacts"):
+        assert fine[-1][field] == pytest.approx(coarse[-1][field], rel=1e-12), field
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_half_a_second_of_bouncing_has_the_same_impacts(fmus, kind):
+    run = impactgen.simulate(impactgen.load_scene("paper"), t_end=0.5)
+    result, log = run_fmu(fmus["paper"], kind, 0.5, interval=1e-3)
+    assert result[-1]["impacts"] == len(run.impacts)
+    starts = [t for t, a, b in log.events if a == "free"]
+    np.testing.assert_allclose(starts, [i.t_start for i in run.impacts[1:]], rtol=0, atol=1e-6)
+
+
+def test_a_non_physical_parameter_is_refused_by_name(fmus, tmp_path):
+    md = read_model_description(str(fmus["paper"]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = tmp_path / "u"
+    with zipfile.ZipFile(fmus["paper"]) as z:
+        z.extractall(unzipped)
+    messages: list[str] = []
+
+    def logger(env, instance, status, category, message):
+        messages.append(message.decode())
+
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped), modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="bad")
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE, \
+        fmi2CallbackFreeMemoryTYPE, calloc, free
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    fmu.instantiate(callbacks=callbacks, loggingOn=True)
+    for name, value in (("chain.mass[1]", 0.0), ("rod.nu", 0.7), ("contact.friction", -0.1),
+                        ("surface.E", float("nan"))):
+        with pytest.raises(Exception):
+            fmu.setReal([vr[name]], [value])
+        assert name in messages[-1], messages[-1]
+    assert "%" not in messages[-1] or "%%" not in messages[-1]
+    fmu.setReal([vr["chain.mass[1]"]], [2.0])  # a good value is taken
+    assert fmu.getReal([vr["chain.mass[1]"]]) == [2.0]
+    fmu.freeInstance()
+
+
+def _cs_run(fmu, vr, stop: float, h: float) -> list[float]:
+    fmu.setupExperiment(tolerance=RTOL, startTime=0.0, stopTime=stop)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    t = 0.0
+    while t < stop - 1e-12:
+        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        t += h
+    return fmu.getReal([vr["u[1]"], vr["u[2]"], vr["W_normal"], vr["delta_max"]])
+
+
+def test_instances_side_by_side_and_reset(fmus, tmp_path):
+    md = read_model_description(str(fmus["paper"]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = tmp_path / "u"
+    with zipfile.ZipFile(fmus["paper"]) as z:
+        z.extractall(unzipped)
+
+    def new(name):
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped),
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        fmu.instantiate()
+        return fmu
+
+    alone = new("alone")
+    expected = _cs_run(alone, vr, 2e-3, 1e-4)
+    a, b = new("a"), new("b")
+    b.setReal([vr["initial.u[2]"]], [-0.5])  # a different case beside it
+    for fmu in (a, b):
+        fmu.setupExperiment(tolerance=RTOL, startTime=0.0, stopTime=2e-3)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+    t = 0.0
+    for _ in range(20):  # interleaved steps
+        a.doStep(currentCommunicationPoint=t, communicationStepSize=1e-4)
+        b.doStep(currentCommunicationPoint=t, communicationStepSize=1e-4)
+        t += 1e-4
+    assert a.getReal([vr["u[1]"], vr["u[2]"], vr["W_normal"], vr["delta_max"]]) == expected
+    assert b.getReal([vr["delta_max"]])[0] != expected[3]
+    alone.reset()
+    assert _cs_run(alone, vr, 2e-3, 1e-4) == expected  # a reset instance starts afresh
+    for fmu in (alone, a, b):
+        fmu.terminate()
+        fmu.freeInstance()
+
+
+def test_fmu_command_writes_a_model_exchange_fmu_without_sundials(tmp_path):
+    import sys
+    out = tmp_path / "chain3.fmu"
+    res = subprocess.run([sys.executable, "-m", "impactgen.cli", "fmu", "--links", "3", "--kind", "me",
+                          "--out", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert validate_fmu(str(out)) == []
+    md = read_model_description(str(out))
+    assert md.modelExchange is not None and md.coSimulation is None
+    bad = subprocess.run([sys.executable, "-m", "impactgen.cli", "fmu", "paper", "--links", "2"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "scene or --links" in bad.stderr
