@@ -16,7 +16,7 @@ from impactgen.fmu import build_fmu
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy import read_model_description, simulate_fmu  # noqa: E402
-from fmpy.fmi2 import FMU2Model, FMU2Slave  # noqa: E402
+from fmpy.fmi2 import FMU2Slave  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
 RTOL = 1e-10
