@@ -73,6 +73,7 @@ E_rod, E_surface = sm.symbols("E_rod E_surface", positive=True)
 nu_rod, nu_surface = sm.symbols("nu_rod nu_surface", real=True)
 S_y_rod, S_y_surface = sm.symbols("S_y_rod S_y_surface", positive=True)
 R_tip = sm.Symbol("R_tip", positive=True)
+MATERIAL_INPUTS = (E_rod, nu_rod, S_y_rod, R_tip, E_surface, nu_surface, S_y_surface)  # the scene sets these
 S_y = sm.Symbol("S_y", positive=True)  # yield strength of the weaker material
 nu = sm.Symbol("nu", real=True)  # its Poisson ratio
 

@@ -8,7 +8,7 @@ computed once per call and named `sin_q1`, `cos_q1`, ... as in the equations.
 from __future__ import annotations
 
 import importlib.resources
-import re
+import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -16,6 +16,7 @@ import jinja2
 import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
+from . import contact as law
 from . import machine
 from .expressions import PHASES, ModelExpressions, ModelSpec, assemble_model
 from .parameters import Field
@@ -77,6 +78,12 @@ class CBlock:
 
     temps: tuple[tuple[str, str], ...]
     results: tuple[tuple[str, str], ...]
+    reads: frozenset[str] = frozenset()  # names of the free symbols of its expressions
+
+
+def _reads(exprs) -> frozenset[str]:
+    """The names an expression list reads (its free symbols): what a C function must unpack."""
+    return frozenset(str(x) for e in exprs for x in sm.sympify(e).free_symbols)
 
 
 def c_block(named: list[tuple[str, sm.Expr]], tmp: str) -> CBlock:
@@ -84,7 +91,7 @@ def c_block(named: list[tuple[str, sm.Expr]], tmp: str) -> CBlock:
     exprs = [sm.sympify(e) for _, e in named]
     replacements, reduced = sm.cse(exprs, symbols=sm.numbered_symbols(tmp), optimizations=CSE_OPTIMIZATIONS)
     return CBlock(tuple((str(s), ccode(e)) for s, e in replacements),
-                  tuple((name, ccode(e)) for (name, _), e in zip(named, reduced)))
+                  tuple((name, ccode(e)) for (name, _), e in zip(named, reduced)), _reads(exprs))
 
 
 def _trig_names(n: int) -> dict[sm.Expr, sm.Symbol]:
@@ -155,20 +162,77 @@ class Kernel:
     blocks: tuple[CBlock, ...]
 
 
-def _kernel(model: ModelExpressions, blocks: list[CBlock], extra_code: list[str] = ()) -> Kernel:
-    """Find what straight-line `blocks` (and hand-written `extra_code`) read, in order."""
+def _kernel(model: ModelExpressions, blocks: list[CBlock], extra: tuple = ()) -> Kernel:
+    """What straight-line `blocks` (and the sympy expressions `extra` printed beside them)
+    read, from their free symbols: the states, parameters and sin/cos to unpack, in order."""
     n = model.spec.links
-    text = [c for b in blocks for _, c in b.temps + b.results] + list(extra_code)
+    reads = set().union(*(b.reads for b in blocks), _reads(extra))
     trig = [(f"{fn}_q{i}", fn, f"q{i}") for i in range(1, n + 1) for fn in ("sin", "cos")
-            if any(_mentions(c, f"{fn}_q{i}") for c in text)]
-    text_with_trig = text + [a for _, _, a in trig]
+            if f"{fn}_q{i}" in reads]
+    reads |= {angle for _, _, angle in trig}
     states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
-    used_states = tuple((i, name) for i, name in states if any(_mentions(c, name) for c in text_with_trig))
-    params = tuple(f.name for f in model.params if any(_mentions(c, f.name) for c in text))
+    used_states = tuple((i, name) for i, name in states if name in reads)
+    params = tuple(f.name for f in model.params if f.name in reads)
     return Kernel(used_states, params, tuple(trig), tuple(blocks))
 
 
-def _context(model: ModelExpressions, prefix: str) -> dict:
+@dataclass(frozen=True)
+class EmitContext:
+    """Everything the templates print, typed: the model's kernels and blocks, its phase
+    machine's tables and laws, and the names of both."""
+
+    prefix: str
+    spec: ModelSpec
+    n: int  # links
+    nstate: int
+    state_names: tuple[str, ...]
+    params: tuple[Field, ...]  # the parameter struct, in order
+    phases: list[tuple[str, int]]  # (PHASE name, params.phase code) of each force law
+    events: list[dict]  # name (upper case), doc, C expression
+    outputs: list[tuple[str, str]]  # (name, doc)
+    rhs: Kernel
+    rhs_tip: CBlock  # tip kinematics the right-hand side needs
+    kane: CBlock  # M (lower triangle) and f of Kane's equations
+    friction_block: CBlock | None  # s and F_f
+    constrained: bool  # a phase holds a tip velocity by a constraint force
+    tip_jacobian: CBlock
+    tip_jacobian_x: CBlock
+    event_forces: list[str]  # forces the event functions read (solved with the accelerations)
+    works: list[tuple[str, str, str]]  # (target, C, doc) of the work states' derivatives
+    events_kernel: Kernel
+    ev_tip: CBlock
+    outputs_kernel: Kernel
+    out_tip: CBlock
+    energies: CBlock
+    force_cases: list[dict]  # per force law: phase, doc, active condition, kernels
+    jac: dict | None  # the analytic Jacobian's block, kernel, works count and accelerations read
+    api_version: int
+    structure_hash: str
+    thresholds: tuple  # machine.THRESHOLDS
+    all_states: tuple[str, ...]  # machine states, every model
+    state_laws: list[tuple[str, str]]  # (machine state, force law) of this model's states
+    material_inputs: tuple[str, ...]  # what the derived constants are computed from
+    laws: machine.SwitchLaws
+    param_names: list[str]
+    cdef: bool = False  # rendering declarations for cffi (no string or float #defines)
+
+    @property
+    def PREFIX(self) -> str:  # noqa: N802 (the C macros' spelling)
+        return self.prefix.upper()
+
+    def mapping(self, **changes) -> dict:
+        """The template variables: every field, and PREFIX."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out["PREFIX"] = self.PREFIX
+        out["kind_code"] = KIND_CODE
+        out.update(changes)
+        return out
+
+
+KIND_CODE = {"input": 0, "derived": 1, "machine": 2}  # model_param_kind() of each table kind
+
+
+def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     spec, chain = model.spec, model.chain
     n = spec.links
     trig = _trig_names(n)
@@ -187,10 +251,10 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
     kane = c_block([(f"M[{i * n + j}]", t(M[i, j])) for i in range(n) for j in range(i + 1)]
                    + [(f"f[{i}]", t(model.forcing[i])) for i in range(n)], "kin")
     friction = None
-    if model.friction is not None:  # F_f = -mu F s, with s kept by name for sustained contact
+    if model.friction_force is not None:  # F_f = -mu F s, with s kept by name for sustained contact
         s_f = sm.Symbol("s")
         friction = c_block([("s", model.friction_sign),
-                            ("F_f", model.friction.subs(model.friction_sign, s_f))], "fr")
+                            ("F_f", model.friction_force.subs(model.friction_sign, s_f))], "fr")
     tip_jacobian = c_block([(r.name, t(r.expr)) for r in model.tip_jacobian
                             if spec.has_friction or not r.name.startswith("Jx")], "tj")
     tip_jacobian_x = c_block([(r.name, t(r.expr)) for r in model.tip_jacobian
@@ -204,7 +268,8 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
     # Events: only delta and its rate are needed.
     ev_tip = tip_block(["delta", "delta_rate"])
     events = [{"name": e.name.upper(), "doc": e.doc, "expr": ccode(e.expr)} for e in model.events]
-    event_forces = [name for name in ("F", "F_f", "v_Bx") if any(_mentions(e["expr"], name) for e in events)]
+    event_reads = _reads([e.expr for e in model.events])
+    event_forces = [name for name in ("F", "F_f", "v_Bx") if name in event_reads]
 
     # Outputs: every tip quantity, the forces, the energies.
     out_tip = tip_block([v.name for v in model.tip])
@@ -215,13 +280,12 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
     force_cases = []
     slopes = dict(model.jacobian.force_slopes) if model.jacobian else {}
     for case in model.force_cases:
-        block = CBlock((), tuple((str(name), ccode(e)) for name, e in case.steps))
-        active = ccode(case.active)
-        entry = {"phase": case.phase.upper(), "doc": case.doc, "active": active,
-                 "kernel": _kernel(model, [block], [active])}
+        block = CBlock((), tuple((str(name), ccode(e)) for name, e in case.steps), _reads([e for _, e in case.steps]))
+        entry = {"phase": case.phase.upper(), "doc": case.doc, "active": ccode(case.active),
+                 "kernel": _kernel(model, [block], (case.active,))}
         if case.phase in slopes:
             slope = c_block([("dF", slopes[case.phase])], "s")
-            entry["slope_kernel"] = _kernel(model, [slope], [active])
+            entry["slope_kernel"] = _kernel(model, [slope], (case.active,))
         force_cases.append(entry)
 
     jac = None
@@ -231,51 +295,27 @@ def _context(model: ModelExpressions, prefix: str) -> dict:
         entries += [(f"Jw[{k * 2 * n + j}]", t(J.works[k, j])) for k in range(J.works.rows) for j in range(2 * n)]
         jac_block = c_block(entries, "jac")
         jac_blocks = [rhs_tip, kane, jac_block] + ([friction] if friction else [])
-        text = [c for _, c in jac_block.temps + jac_block.results]
-        udot_used = [i for i in range(n) if any(_mentions(c, f"udot{i + 1}") for c in text)]
+        udot_used = [i for i in range(n) if f"udot{i + 1}" in jac_block.reads]
         jac = {"block": jac_block, "kernel": _kernel(model, jac_blocks), "nworks": J.works.rows,
                "udot": udot_used}
 
     params = model.params
     present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
-    return {
-        "api_version": machine.API_VERSION,
-        "structure_hash": machine.structure_hash(model),
-        "thresholds": machine.THRESHOLDS,
-        "all_states": machine.STATES,
-        "state_laws": [(s, machine.STATE_LAW[s]) for s in machine.STATES if s in present],
-        "kind_code": {"input": 0, "derived": 1, "machine": 2},
-        "material_inputs": ("E_rod", "nu_rod", "S_y_rod", "R_tip", "E_surface", "nu_surface", "S_y_surface"),
-        "laws": machine.switch_laws(model, ccode),
-        "param_names": [f.name for f in params],
-        "cdef": False,
-        "prefix": prefix,
-        "PREFIX": prefix.upper(),
-        "spec": spec,
-        "n": n,
-        "nstate": len(model.state_names),
-        "state_names": model.state_names,
-        "params": model.params,
-        "phases": [(p.upper(), PHASE_CODES[p]) for p in model.phases],
-        "events": events,
-        "outputs": [(o.name, o.doc) for o in model.outputs],
-        "rhs": _kernel(model, rhs_blocks),
-        "rhs_tip": rhs_tip,
-        "kane": kane,
-        "friction": friction,
-        "constrained": spec.constrained,
-        "tip_jacobian": tip_jacobian,
-        "tip_jacobian_x": tip_jacobian_x,
-        "event_forces": event_forces,
-        "works": works,
-        "events_kernel": _kernel(model, [ev_tip], [e["expr"] for e in events]),
-        "ev_tip": ev_tip,
-        "outputs_kernel": _kernel(model, out_blocks),
-        "out_tip": out_tip,
-        "energies": energies,
-        "force_cases": force_cases,
-        "jac": jac,
-    }
+    return EmitContext(
+        prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
+        params=model.params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
+        outputs=[(o.name, o.doc) for o in model.outputs], rhs=_kernel(model, rhs_blocks), rhs_tip=rhs_tip,
+        kane=kane, friction_block=friction, constrained=spec.constrained, tip_jacobian=tip_jacobian,
+        tip_jacobian_x=tip_jacobian_x, event_forces=event_forces, works=works,
+        events_kernel=_kernel(model, [ev_tip], tuple(e.expr for e in model.events)), ev_tip=ev_tip,
+        outputs_kernel=_kernel(model, out_blocks), out_tip=out_tip, energies=energies,
+        force_cases=force_cases, jac=jac,
+        api_version=machine.API_VERSION, structure_hash=machine.structure_hash(model),
+        thresholds=machine.THRESHOLDS, all_states=machine.STATES,
+        state_laws=[(s, machine.STATE_LAW[s]) for s in machine.STATES if s in present],
+        material_inputs=tuple(str(x) for x in law.MATERIAL_INPUTS), laws=machine.switch_laws(model, ccode),
+        param_names=[f.name for f in params],
+    )
 
 
 def _tidy(text: str) -> str:
@@ -288,19 +328,16 @@ def _tidy(text: str) -> str:
     return "\n".join(out).strip("\n") + "\n"
 
 
-def _mentions(code: str, name: str) -> bool:
-    return re.search(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])", code) is not None
-
-
 @lru_cache(maxsize=32)
 def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
     """Emit model.h, model.c and the cffi declarations for `spec`."""
     if not prefix.isidentifier() or not prefix.isascii():
         raise ValueError(f"prefix {prefix!r} is not a C identifier")
     model = assemble_model(spec)
-    ctx = _context(model, prefix)
+    context = _context(model, prefix)
+    ctx = context.mapping()
     env = _templates()
-    machine_decls = env.get_template("machine_decls.j2").render(ctx, cdef=True)
+    machine_decls = env.get_template("machine_decls.j2").render(context.mapping(cdef=True))
     return GeneratedModel(
         spec=spec,
         prefix=prefix,
@@ -314,7 +351,7 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
         event_names=tuple(e.name for e in model.events),
         param_names=tuple(f.name for f in model.params),
         phases=model.phases,
-        structure_hash=ctx["structure_hash"],
+        structure_hash=context.structure_hash,
     )
 
 

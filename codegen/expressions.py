@@ -36,7 +36,7 @@ class ModelSpec:
 
     links: int
     contact_model: str = "three-phase"  # "three-phase" | "hertz"
-    friction: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip)
+    friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip)
     jacobian: bool = False  # emit the analytic Jacobian (for BDF)
     sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
 
@@ -45,16 +45,16 @@ class ModelSpec:
             raise ValueError("links must be >= 1")
         if self.contact_model not in ("three-phase", "hertz"):
             raise ValueError(f"unknown contact model {self.contact_model!r}")
-        if self.friction not in FRICTION_KINDS:
-            raise ValueError(f"unknown friction kind {self.friction!r}")
+        if self.friction_law not in FRICTION_KINDS:
+            raise ValueError(f"unknown friction law {self.friction_law!r}")
 
     @property
     def has_friction(self) -> bool:
-        return self.friction != "none"
+        return self.friction_law != "none"
 
     @property
     def coulomb(self) -> bool:
-        return self.friction == "coulomb"
+        return self.friction_law == "coulomb"
 
     @property
     def constrained(self) -> bool:
@@ -68,7 +68,7 @@ class ModelSpec:
     @property
     def slug(self) -> str:
         """A short readable name, e.g. 'chain2-three-phase-regularized'."""
-        return (f"chain{self.links}-{self.contact_model}-{self.friction}"
+        return (f"chain{self.links}-{self.contact_model}-{self.friction_law}"
                 + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else ""))
 
     def to_json(self) -> str:
@@ -124,7 +124,7 @@ class ModelExpressions:
     forcing: sm.Matrix  # the chain's forcing, with F_f = 0 when friction is pruned
     tip: tuple[Named, ...]  # x_B, y_B, v_Bx, v_By, delta, delta_rate
     force_cases: tuple[ForceCase, ...]
-    friction: sm.Expr | None  # F_f in terms of F and v_Bx (and slip, for exact Coulomb)
+    friction_force: sm.Expr | None  # F_f in terms of F and v_Bx (and slip, for exact Coulomb)
     friction_sign: sm.Expr | None  # s of F_f = -mu F s: regularized sign of v_Bx, or slip
     tip_jacobian: tuple[Named, ...]  # v_B = J_B u: rows Jx, Jy and the terms Jdot u
     events: tuple[Named, ...]
@@ -178,7 +178,7 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     sign = None
     if spec.has_friction:
         sign = law.slip if spec.coulomb else law.friction_sign(TIP["v_Bx"])
-    friction = law.friction_force(s.F, sign) if sign is not None else None
+    friction_force = law.friction_force(s.F, sign) if sign is not None else None
 
     d, d_rate = TIP["delta"], TIP["delta_rate"]
     events = [
@@ -214,13 +214,13 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
         works.append(Named("friction", s.F_f * TIP["v_Bx"], "power of the friction force, W"))
 
     used: set[sm.Symbol] = set(machine_symbols(spec))
-    for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction or 0]:
+    for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
         used |= sm.sympify(e).free_symbols
-    params = fields(spec.links, spec.friction, {str(x) for x in used})
+    params = fields(spec.links, spec.friction_law, {str(x) for x in used})
 
     forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
-    jacobian = _jacobian(chain, forcing, tuple(cases), friction, tuple(works)) if spec.jacobian else None
-    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction, sign,
+    jacobian = _jacobian(chain, forcing, tuple(cases), friction_force, tuple(works)) if spec.jacobian else None
+    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign,
                             _tip_jacobian(chain) if spec.constrained else (), tuple(events),
                             tuple(outputs), tuple(works), params, jacobian)
 
@@ -244,7 +244,7 @@ def _tip_jacobian(chain: ChainEquations) -> tuple[Named, ...]:
 
 
 def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase, ...],
-              friction: sm.Expr | None, works: tuple[Named, ...]) -> JacobianExpressions:
+              friction_force: sm.Expr | None, works: tuple[Named, ...]) -> JacobianExpressions:
     s = chain.symbols
     n = chain.n
     y = list(s.q) + list(s.u)
@@ -254,8 +254,8 @@ def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase,
     v_Bx, v_By = chain.tip_velocity
     d_delta = [-y_B.diff(v) for v in y]
     dF_dy = [dF * d for d in d_delta]
-    if friction is not None:
-        dFf_dF, dFf_dv = friction.diff(s.F), friction.diff(TIP["v_Bx"])
+    if friction_force is not None:
+        dFf_dF, dFf_dv = friction_force.diff(s.F), friction_force.diff(TIP["v_Bx"])
         dFf_dy = [dFf_dF * a + dFf_dv * v_Bx.diff(v) for a, v in zip(dF_dy, y)]
     else:
         dFf_dy = [0] * len(y)

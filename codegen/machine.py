@@ -4,8 +4,8 @@ The phase machine of MODEL section 4 (which force law and which events with dire
 each machine state, what is recorded at each switch) is C, generated beside the model from
 templates/machine.c.j2. Its switch laws (Eq. 12, the unloading radius, the yield onset) and
 the derived material constants come from the sympy expressions of contact.py, as the force
-laws do; its thresholds are named here and printed as #defines, so Python code that needs
-one (validity warnings, safety checks) reads the same number.
+laws do; its thresholds are named in thresholds.py and printed as #defines, so Python code
+that needs one (scene checks, validity warnings) reads the same number.
 """
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ import sympy as sm
 
 from . import contact as law
 from .expressions import ModelExpressions
+from .thresholds import THRESHOLD, THRESHOLDS  # noqa: F401 (the machine prints them)
 
 API_VERSION = 1  # the C API of model.h and model_machine.h: bumped when a signature changes
 
@@ -26,30 +27,6 @@ STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplast
              "restitution": "restitution", "reloading": "restitution", "sustained": "sustained"}
 
 
-@dataclass(frozen=True)
-class Threshold:
-    name: str
-    value: float
-    doc: str
-
-
-THRESHOLDS = (
-    Threshold("TOUCH_TOLERANCE", 1e-12,
-              "a tip this far below the surface, relative to the chain's length (at least 1 m), "
-              "still touches it at the start: the rounding of a height summed over the links"),
-    Threshold("TANGENTIAL_TOLERANCE", 1e-12,
-              "d(delta)/dt or v_Bx below this fraction of the tip speed is rounding: zero"),
-    Threshold("STOPPED_TOLERANCE", 1e-9,
-              "a slipping tip whose v_Bx has fallen below this fraction of its speed has stopped"),
-    Threshold("CHATTER_RATIO", 2.0,
-              "impacts chatter when a flight is shorter than this many contact times"),
-    Threshold("ANGLE_RESOLUTION", 1e-2,
-              "inside an impact the angles are resolved to this fraction of the expected "
-              "penetration (over the chain's length)"),
-    Threshold("ANGLE_ATOL_FLOOR", 1e-15,
-              "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
-)
-THRESHOLD = {t.name: t.value for t in THRESHOLDS}
 
 
 @dataclass(frozen=True)

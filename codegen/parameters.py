@@ -109,14 +109,14 @@ PARAMETERS: tuple[Parameter, ...] = (
 BY_NAME = {p.name: p for p in PARAMETERS}
 
 
-def included(p: Parameter, friction: str, used: set[str]) -> bool:
-    """Whether a model with this friction kind, whose expressions read `used`, has row `p`."""
+def included(p: Parameter, friction_law: str, used: set[str]) -> bool:
+    """Whether a model with this friction law, whose expressions read `used`, has row `p`."""
     if p.needs == "always":
         return True
     if p.needs == "friction":
-        return friction != "none"
+        return friction_law != "none"
     if p.needs in ("regularized", "coulomb"):
-        return friction == p.needs
+        return friction_law == p.needs
     return p.name in used
 
 
@@ -139,10 +139,10 @@ class Field:
         return float(self.row.read(scene, self.link))
 
 
-def fields(links: int, friction: str, used: set[str]) -> tuple[Field, ...]:
-    """The parameter struct of a model with `links` links and this friction kind, whose
+def fields(links: int, friction_law: str, used: set[str]) -> tuple[Field, ...]:
+    """The parameter struct of a model with `links` links and this friction law, whose
     expressions (force laws, events, switch laws) read the symbols named in `used`."""
-    return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction, used)
+    return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction_law, used)
                  for name, key, link in p.names(links))
 
 

@@ -35,7 +35,7 @@ def test_paper_case_reverses_its_slip_during_restitution(paper_scene, paper_resu
 def test_stuck_tip_holds_still_within_the_friction_cone(stick_case):
     states = [(a, b) for _, a, b in stick_case.impacts[0].stick_slip]
     assert states == [("slip-", "stick"), ("stick", "slip-")]
-    stuck = [p for p in stick_case.phases if p.friction == "stick"]
+    stuck = [p for p in stick_case.phases if p.slip_state == "stick"]
     assert len(stuck) == 1
     inside = (stick_case.t > stuck[0].t0) & (stick_case.t <= stuck[0].t1)
     v_scale = np.max(np.abs(stick_case.v_B))

@@ -25,7 +25,7 @@ def settled(paper_scene):
 def test_chattering_impacts_end_in_sustained_contact(settled):
     sustained = [p for p in settled.phases if p.phase == "sustained"]
     assert sustained and sustained[0].t0 < 1.0  # the chattering starts near t = 0.97 s
-    assert [p.friction for p in sustained] == ["slip+", "stick"]  # slides, then sticks
+    assert [p.slip_state for p in sustained] == ["slip+", "stick"]  # slides, then sticks
     assert sustained[-1].ended_by == "t_end"
     assert settled.warnings == [] or all("chattering" not in w for w in settled.warnings)
     inside = settled.phase == "sustained"

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define MODEL_API_VERSION 1
-#define MODEL_STRUCTURE_HASH "0fa60c8f6d71d0c8"
+#define MODEL_STRUCTURE_HASH "a8ba1a6bb3ce3fbe"
 
 /* Thresholds of the machine (codegen/machine.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */
@@ -41,6 +41,7 @@ extern "C" {
 #define MODEL_STOPPED_TOLERANCE 1e-09  /* a slipping tip whose v_Bx has fallen below this fraction of its speed has stopped */
 #define MODEL_CHATTER_RATIO 2.0  /* impacts chatter when a flight is shorter than this many contact times */
 #define MODEL_ANGLE_RESOLUTION 0.01  /* inside an impact the angles are resolved to this fraction of the expected penetration (over the chain's length) */
+#define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (checked on the samples by the Python wrapper) */
 #define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
 
 /* Machine states: the contact phases of MODEL section 4, plus reloading (restitution's force

@@ -487,7 +487,7 @@ def _phase_line(result) -> str:
     end = impact.t_end if impact.t_end is not None else math.inf
     spans = [p for p in result.phases if p.phase != "free" and impact.t_start <= p.t0 <= end][:12]
     us = 1e6
-    text = ", ".join(f"{p.phase}{' (' + p.friction + ')' if p.friction else ''} "
+    text = ", ".join(f"{p.phase}{' (' + p.slip_state + ')' if p.slip_state else ''} "
                      f"{(p.t0 - impact.t_start) * us:.6g}-{(p.t1 - impact.t_start) * us:.6g}"
                      for p in spans)
     return f"phases of impact 1 (us from its start at t = {impact.t_start:.9g} s): {text}"

@@ -125,7 +125,7 @@ def compare(c: SimulationResult, ref: SimulationResult) -> dict[str, float]:
     sa = [(s["from"], s["to"]) for s in a["switches"]]
     sb = [(s["from"], s["to"]) for s in b["switches"]]
     phases_a, phases_b = _lasting(c.phases), _lasting(ref.phases)
-    if sa != sb or [(p.phase, p.friction) for p in phases_a] != [(p.phase, p.friction) for p in phases_b]:
+    if sa != sb or [(p.phase, p.slip_state) for p in phases_a] != [(p.phase, p.slip_state) for p in phases_b]:
         out["switch_times"] = math.inf
     else:
         times_a = np.array([p.t1 for p in phases_a])

@@ -24,9 +24,9 @@ OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output")
 
 def model_spec(scene: Scene) -> ModelSpec:
     """The structure of the generated C that `scene` needs (numbers stay parameters)."""
-    friction = scene.contact.friction_mode if scene.contact.friction > 0 else "none"
+    friction_law = scene.contact.friction_mode if scene.contact.friction > 0 else "none"
     sustained = scene.solver.t_end is not None and scene.solver.sustained_contact
-    return ModelSpec(scene.n, scene.contact.model, friction, scene.solver.jacobian == "analytic", sustained)
+    return ModelSpec(scene.n, scene.contact.model, friction_law, scene.solver.jacobian == "analytic", sustained)
 
 
 def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,

@@ -17,8 +17,6 @@ from .codegen import contact as law
 from .scene import Scene
 
 YIELD_ONSET = float(law.YIELD_ONSET)  # phase I ends at delta = 1.9 delta_c
-MATERIAL_INPUTS = (law.E_rod, law.nu_rod, law.S_y_rod, law.R_tip, law.E_surface, law.nu_surface,
-                   law.S_y_surface)
 
 
 @dataclass(frozen=True)
@@ -42,7 +40,7 @@ def _lambdified(name: str) -> Callable[..., float]:
         for symbol, expr in steps:
             values[symbol] = expr.xreplace(values)
         fields = [law.E_star, law.R, law.S_y, law.nu, law.C_j, law.delta_c, law.P_c, law.B]
-        return sm.lambdify(MATERIAL_INPUTS, [values[f] for f in fields], modules="math")
+        return sm.lambdify(law.MATERIAL_INPUTS, [values[f] for f in fields], modules="math")
     if name == "residual":
         return sm.lambdify((law.delta_max, law.delta_c), law.residual_deformation(), modules="math")
     if name == "unloading":

@@ -15,6 +15,7 @@ import numpy as np
 
 from .build import CompiledModel
 from .codegen.machine import STATES
+from .codegen.thresholds import THRESHOLD
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
@@ -23,7 +24,7 @@ from .scene import Scene
 from .session import CvodeSession
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
-STICK_EXCESS = 1e-6  # a stuck tip's |F_f| beyond mu F by this fraction of max F: a missed slip
+STICK_EXCESS = THRESHOLD["STICK_EXCESS"]
 SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
 
 
@@ -43,7 +44,7 @@ class Machine:
         return self.names[self.state.state]
 
     @property
-    def friction(self) -> str:
+    def slip_state(self) -> str:
         """The stick-slip label of a contact phase with exact Coulomb friction, else ""."""
         return SLIP_LABEL[self.state.slip] if self.coulomb and self.state.state != 0 else ""
 
@@ -115,7 +116,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
             if len(spans) >= MAX_SEGMENTS:
                 raise SolverError(f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); "
                                   "shorten solver.t_end", machine.phase, t)
-            phase, friction = machine.phase, machine.friction
+            phase, slip_state = machine.phase, machine.slip_state
             n_events = lib.model_machine_events(m, session.event_idx, session.event_dirs)
             if analytic:  # the analytic Jacobian does not know the constraint forces
                 session.use_jacobian(not lib.model_machine_constrained(m))
@@ -127,12 +128,12 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                     record(phase, *partial)
                 raise
             seg_out = record(phase, seg_t, seg_y, seg_d)
-            if friction == "stick":
+            if slip_state == "stick":
                 _check_stick(seg_out, out_index, scene.contact.friction, phase, float(seg_t[-1]))
             t, y = float(seg_t[-1]), seg_y[-1].copy()
             ended_by = [model.event_names[session.event_idx[k]] for k in range(n_events) if session.roots[k]]
             spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t,
-                                   ended_by[0] if fired and ended_by else "t_end", friction))
+                                   ended_by[0] if fired and ended_by else "t_end", slip_state))
             if not fired:
                 status, message = _end_without_event(scene, impacts, phase)
                 break
@@ -141,7 +142,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                 impacts.append(Impact(t_start=t, i_start=n_samples - 1))
             impact = impacts[-1] if impacts else None
             if act & lib.MODEL_ACT_SLIP:
-                impact.stick_slip.append((t, friction, machine.friction))
+                impact.stick_slip.append((t, slip_state, machine.slip_state))
             if act & lib.MODEL_ACT_MAX_COMPRESSION:
                 impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = m.delta_max, m.P_max, m.delta_r, m.R_res
             new_phase = machine.phase

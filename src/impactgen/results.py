@@ -30,12 +30,12 @@ class PhaseSpan:
     t0: float
     t1: float
     ended_by: str  # the event that ended it, or "t_end"
-    friction: str = ""  # exact Coulomb friction: "slip+", "slip-" or "stick" during the span
+    slip_state: str = ""  # exact Coulomb friction: "slip+", "slip-" or "stick" during the span
 
     def to_dict(self) -> dict[str, Any]:
         out = {"phase": self.phase, "t0": self.t0, "t1": self.t1, "ended_by": self.ended_by}
-        if self.friction:
-            out["friction"] = self.friction
+        if self.slip_state:
+            out["slip_state"] = self.slip_state
         return out
 
 

@@ -20,6 +20,7 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - exercised on 3.10 only
     import tomli as tomllib  # type: ignore[no-redef]
 
+from .codegen.thresholds import THRESHOLD
 from .errors import SceneError
 
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
@@ -34,8 +35,9 @@ JACOBIAN_AUTO_MAX_LINKS = 6
 
 _MISSING = object()
 # A tip (or joint) this far below the surface, relative to the chain's length (at least
-# 1 m), still counts as touching it: the rounding of a height summed over the links.
-TOUCH_TOLERANCE = 1e-12
+# 1 m), still counts as touching it: the rounding of a height summed over the links (the
+# phase machine's own start test uses the same number).
+TOUCH_TOLERANCE = THRESHOLD["TOUCH_TOLERANCE"]
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ Checked per impact from what was recorded at maximum compression:
 from __future__ import annotations
 
 
-from .codegen.machine import THRESHOLD
+from .codegen.thresholds import THRESHOLD
 from .laws import YIELD_ONSET, contact_constants, contact_radius
 from .scene import Scene
 

@@ -1,0 +1,38 @@
+"""The named thresholds of the phase machine, in one place for the C and the Python.
+
+The generated machine prints them as #defines (MODEL_TOUCH_TOLERANCE, ...); the scene checks,
+the validity warnings and the Python wrapper read the same numbers from here. No sympy: the
+scene module imports this at start-up.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Threshold:
+    name: str
+    value: float
+    doc: str
+
+
+THRESHOLDS = (
+    Threshold("TOUCH_TOLERANCE", 1e-12,
+              "a tip this far below the surface, relative to the chain's length (at least 1 m), "
+              "still touches it at the start: the rounding of a height summed over the links"),
+    Threshold("TANGENTIAL_TOLERANCE", 1e-12,
+              "d(delta)/dt or v_Bx below this fraction of the tip speed is rounding: zero"),
+    Threshold("STOPPED_TOLERANCE", 1e-9,
+              "a slipping tip whose v_Bx has fallen below this fraction of its speed has stopped"),
+    Threshold("CHATTER_RATIO", 2.0,
+              "impacts chatter when a flight is shorter than this many contact times"),
+    Threshold("ANGLE_RESOLUTION", 1e-2,
+              "inside an impact the angles are resolved to this fraction of the expected "
+              "penetration (over the chain's length)"),
+    Threshold("STICK_EXCESS", 1e-6,
+              "a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event "
+              "(checked on the samples by the Python wrapper)"),
+    Threshold("ANGLE_ATOL_FLOOR", 1e-15,
+              "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
+)
+THRESHOLD = {t.name: t.value for t in THRESHOLDS}
