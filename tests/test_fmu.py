@@ -209,3 +209,25 @@ def test_fmu_command_writes_a_model_exchange_fmu_without_sundials(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "impactgen.cli", "fmu", "paper", "--links", "2"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "scene or --links" in bad.stderr
+
+
+def test_a_second_importer_libcosim_runs_the_co_simulation_fmu(fmus):
+    """libcosim (the Open Simulation Platform's co-simulation master, through libcosimpy)
+    steps the FMU at a fixed 0.1 ms and gets the paper's impact."""
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+    execution = CosimExecution.from_step_size(int(1e-4 * 1e9))  # nanoseconds
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmus["paper"]), instance_name="paper"))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    vr = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
+    assert execution.simulate_until(int(1e-3 * 1e9))
+    names = ["delta_max", "delta_r", "P_max", "u[1]", "u[2]", "W_normal"]
+    got = dict(zip(names, observer.last_real_values(index, [vr[n] for n in names])))
+    run = impactgen.simulate(impactgen.load_scene("paper"), t_end=1e-3)
+    for name in ("delta_max", "delta_r", "P_max"):
+        assert got[name] == pytest.approx(getattr(run.impacts[0], name), rel=1e-6), name
+    assert [got["u[1]"], got["u[2]"]] == pytest.approx(list(run.u[:, -1]), rel=1e-6)
+    assert got["W_normal"] == pytest.approx(run.W_normal[-1], rel=1e-6)
