@@ -108,3 +108,35 @@ def test_unreadable_and_invalid_files(tmp_path):
 def test_unknown_override_key_is_an_error():
     with pytest.raises(SceneError, match="unknown key"):
         impactgen.load_scene(PAPER, overrides={"solver.rtoll": 1e-8})
+
+
+def test_a_changed_scene_equals_the_scene_read_in_full():
+    """scene_with (how a sweep builds its cases) checks only the changed values, and must
+    give the very scene, or the very error, that reading the whole scene gives."""
+    import random
+
+    from impactgen.errors import SceneError
+    from impactgen.scene import scene_from_dict, scene_with
+    rng = random.Random(7)
+    values = {
+        "initial.u[2]": lambda: rng.uniform(-1, 1), "initial.q_deg[2]": lambda: rng.uniform(-90, 0),
+        "initial.q[1]": lambda: rng.uniform(-1.6, -0.5), "initial.u": lambda: [rng.uniform(-1, 1)] * 2,
+        "initial.q_deg": lambda: [rng.uniform(-80, -40), rng.uniform(-80, -40)],
+        "chain.length[1]": lambda: rng.choice([rng.uniform(0.1, 2), -1.0]), "chain.mass[2]": lambda: 2.0,
+        "chain.mass": lambda: rng.uniform(0.5, 2), "contact.friction": lambda: rng.choice([0.0, 0.3, -0.2]),
+        "rod.yield_strength": lambda: rng.choice([1e9, 3e11]), "rod.nu": lambda: rng.choice([0.3, 0.6]),
+        "surface.height": lambda: rng.choice(["initial", -1.8, 0.0]), "solver.rtol": lambda: rng.choice([1e-8, "x"]),
+        "solver.t_end": lambda: rng.choice(["separation", 0.5]), "contact.friction_mode": lambda: rng.choice(
+            ["coulomb", "bad"]), "chain.links": lambda: rng.choice([2, 3]), "solver.method": lambda: "adams",
+        "rod.tip_radius": lambda: rng.uniform(1e-4, 1e-2), "initial.u[3]": lambda: 0.1, "name": lambda: "x y"}
+    for name in ("paper", "chain3-free-flight"):
+        base = impactgen.load_scene(name)
+        for _ in range(400):
+            overrides = {k: values[k]() for k in rng.sample(sorted(values), rng.randint(1, 3))}
+            outcomes = []
+            for build in (lambda: scene_from_dict(base.to_dict(), overrides), lambda: scene_with(base, overrides)):
+                try:
+                    outcomes.append(build())
+                except SceneError as exc:
+                    outcomes.append(str(exc))
+            assert outcomes[0] == outcomes[1], overrides

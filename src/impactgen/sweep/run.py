@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
-from ..scene import Scene, scene_from_dict
+from ..scene import Scene, scene_from_dict, scene_with
 from . import execute
 from .spec import SweepSpec
 
@@ -37,14 +37,14 @@ class CaseOptions:
     keep_trajectories: frozenset[int] = frozenset()  # case indices whose samples are kept
 
 
-def case_row(base: dict[str, Any], index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
-    """One case of the scene `base` (as `Scene.to_dict` gives it): its varied inputs, every
-    scalar summary field, status, message, warnings, time."""
+def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
+    """One case of the scene `base`: its varied inputs, every scalar summary field, status,
+    message, warnings, time."""
     import impactgen
     started = time.perf_counter()
     row: dict[str, Any] = {"case": index, **overrides}
     try:
-        scene = scene_from_dict(base, overrides)
+        scene = scene_with(base, overrides)
     except SceneError as exc:
         row.update(status=STATUS_INVALID, message=str(exc), warnings="",
                    wall_s=time.perf_counter() - started)
@@ -79,7 +79,8 @@ def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
 
 def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> list[dict[str, Any]]:
     """The rows of some cases of one scene (what a worker process or Dask task runs)."""
-    return [case_row(scene_dict, index, overrides, index in options.keep_trajectories) for index, overrides in cases]
+    base = scene_from_dict(scene_dict)
+    return [case_row(base, index, overrides, index in options.keep_trajectories) for index, overrides in cases]
 
 
 def evenly_chosen(count: int, total: int) -> frozenset[int]:
