@@ -54,9 +54,12 @@ def _lambdified(name: str) -> Callable[..., float]:
 def contact_constants(scene: Scene) -> ContactConstants:
     """E*, R, S_y, nu, C_j, delta_c, P_c and B of a scene's materials (MODEL section 3)."""
     rod, flat = scene.rod, scene.surface
-    values = _lambdified("constants")(rod.E, rod.nu, rod.yield_strength, scene.tip_radius,
-                                      flat.E, flat.nu, flat.yield_strength)
-    return ContactConstants(*map(float, values))
+    return _constants_of(rod.E, rod.nu, rod.yield_strength, scene.tip_radius, flat.E, flat.nu, flat.yield_strength)
+
+
+@lru_cache(maxsize=1024)  # a sweep over angles and speeds asks for the same materials each case
+def _constants_of(*materials: float) -> ContactConstants:
+    return ContactConstants(*map(float, _lambdified("constants")(*materials)))
 
 
 def residual_deformation(delta_max: float, delta_c: float) -> float:
