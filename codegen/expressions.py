@@ -15,7 +15,7 @@ from functools import lru_cache
 import sympy as sm
 
 from . import contact as law
-from .mechanics import ChainEquations, derive_chain
+from .mechanics import ChainEquations, chain_equations
 from .parameters import Field, fields
 
 # Phases of MODEL.md section 4, as the C enum values, and the sustained contact that ends a
@@ -148,7 +148,7 @@ class ModelExpressions:
 @lru_cache(maxsize=32)
 def assemble_model(spec: ModelSpec) -> ModelExpressions:
     """Pick and prune the expressions `spec` needs."""
-    chain = derive_chain(spec.links)
+    chain = chain_equations(spec.links)
     s = chain.symbols
     x_B, y_B = chain.tip_position
     v_Bx, v_By = chain.tip_velocity

@@ -6,7 +6,10 @@ contact force F (along +y) and a friction force F_f (along +x), kept as symbols 
 that the contact laws (contact.py) stay separate and prunable.
 
 Kane's equations come out as M(q) du/dt = f(q, u, F, F_f); M is kept as a matrix and
-solved numerically in the generated C, never inverted symbolically.
+solved numerically in the generated C, never inverted symbolically. Beyond KANE_MAX_LINKS
+links the generator takes the same equations from their closed form (`closed_form_chain`),
+which the tests hold equal to Kane's method: Kane's symbolic expansion grows to minutes
+there (52 s to derive 30 links) while the closed form takes about 2 s.
 """
 from __future__ import annotations
 
@@ -129,3 +132,62 @@ def derive_chain(n: int) -> ChainEquations:
         potential_energy=to_plain(sum(b.mass * s.g * b.masscenter.pos_from(O).dot(N.y)
                                       for b in bodies)),
     )
+
+
+# Above this many links the chain's equations come from their closed form (below), which
+# tests/test_mechanics_closed_form.py holds equal to Kane's method for 1 to 6 links: Kane's
+# method expands every product symbolically, which for 30 links takes about 50 s and prints
+# 445 kB of C, while the closed form takes milliseconds and names each term once.
+KANE_MAX_LINKS = 8
+
+
+@lru_cache(maxsize=8)
+def closed_form_chain(n: int) -> ChainEquations:
+    """The n-link chain's equations from their known structure, in the symbols Kane's method
+    gives. With A_jk = L_j L_k (m_h / 2 + sum_{i>h} m_i), h = max(j, k) (and
+    A_jj = L_j^2 (m_j / 3 + sum_{i>j} m_i)), the mass matrix is M_jk = A_jk cos(q_j - q_k)
+    and the forcing f_j = -sum_k A_jk sin(q_j - q_k) u_k^2 - g L_j cos q_j (m_j / 2 +
+    sum_{i>j} m_i) + L_j (F cos q_j - F_f sin q_j): the Lagrange equations of T = u^T M u / 2."""
+    if n < 1:
+        raise ValueError("a chain needs at least one link")
+    s = ChainSymbols.for_links(n)
+    c = [sm.cos(q) for q in s.q]
+    si = [sm.sin(q) for q in s.q]
+    beyond = [sm.Add(*s.m[i + 1:]) for i in range(n)]  # mass beyond link i
+
+    def A(j: int, k: int) -> sm.Expr:
+        if j == k:
+            return s.L[j] ** 2 * (s.m[j] / 3 + beyond[j])
+        h = max(j, k)
+        return s.L[j] * s.L[k] * (s.m[h] / 2 + beyond[h])
+
+    def cos_diff(j: int, k: int) -> sm.Expr:
+        return c[j] * c[k] + si[j] * si[k]
+
+    def sin_diff(j: int, k: int) -> sm.Expr:
+        return si[j] * c[k] - c[j] * si[k]
+
+    M = sm.Matrix(n, n, lambda j, k: A(j, j) if j == k else A(j, k) * cos_diff(j, k))
+    f = sm.Matrix(n, 1, lambda j, _: (-sm.Add(*(A(j, k) * sin_diff(j, k) * s.u[k] ** 2 for k in range(n) if k != j))
+                                      - s.g * s.L[j] * c[j] * (s.m[j] / 2 + beyond[j])
+                                      + s.L[j] * (s.F * c[j] - s.F_f * si[j])))
+    # the centre of link i and the tip: sums over the links before
+    x_B = sm.Add(*(s.L[j] * c[j] for j in range(n)))
+    y_B = sm.Add(*(s.L[j] * si[j] for j in range(n)))
+    v_Bx = sm.Add(*(-s.L[j] * si[j] * s.u[j] for j in range(n)))
+    v_By = sm.Add(*(s.L[j] * c[j] * s.u[j] for j in range(n)))
+    T, V = [], []
+    for i in range(n):
+        arm = [s.L[j] for j in range(i)] + [s.L[i] / 2]  # lever of u_j in the centre's velocity
+        v2 = sm.Add(*(arm[j] * arm[k] * (1 if j == k else cos_diff(j, k)) * s.u[j] * s.u[k]
+                      for j in range(i + 1) for k in range(i + 1)))
+        T.append(s.m[i] * v2 / 2 + s.m[i] * s.L[i] ** 2 / 24 * s.u[i] ** 2)
+        V.append(s.m[i] * s.g * sm.Add(*(arm[j] * si[j] for j in range(i + 1))))
+    return ChainEquations(n=n, symbols=s, mass_matrix=M, forcing=f, tip_position=(x_B, y_B),
+                          tip_velocity=(v_Bx, v_By), kinetic_energy=tuple(T), potential_energy=sm.Add(*V))
+
+
+def chain_equations(n: int) -> ChainEquations:
+    """The chain's equations as the generator uses them: Kane's method (sympy.physics.mechanics)
+    up to KANE_MAX_LINKS links, the closed form it is checked against beyond."""
+    return derive_chain(n) if n <= KANE_MAX_LINKS else closed_form_chain(n)

@@ -1,0 +1,38 @@
+"""The chain's closed-form equations (used beyond KANE_MAX_LINKS links, where Kane's method
+costs minutes) against Kane's method (sympy.physics.mechanics) and the reference engine."""
+from __future__ import annotations
+
+import pytest
+import sympy as sm
+
+import impactgen
+from impactgen.codegen.mechanics import KANE_MAX_LINKS, chain_equations, closed_form_chain, derive_chain
+from impactgen.scene import steel_chain_scene
+
+
+def _parts(eq):
+    return (list(eq.mass_matrix) + list(eq.forcing) + list(eq.tip_position) + list(eq.tip_velocity)
+            + list(eq.kinetic_energy) + [eq.potential_energy])
+
+
+@pytest.mark.parametrize("n", range(1, 7))
+def test_closed_form_equals_kanes_method(n):
+    kane, closed = derive_chain(n), closed_form_chain(n)
+    for a, b in zip(_parts(kane), _parts(closed), strict=True):
+        assert sm.simplify(sm.expand_trig(a - b)) == 0
+
+
+def test_the_generator_switches_to_the_closed_form_beyond_kanes_range():
+    assert chain_equations(KANE_MAX_LINKS) is derive_chain(KANE_MAX_LINKS)
+    assert chain_equations(KANE_MAX_LINKS + 1) is closed_form_chain(KANE_MAX_LINKS + 1)
+
+
+@pytest.mark.slow
+def test_a_long_chain_agrees_with_the_reference_engine():
+    """12 links (closed form in the C) against the reference engine's own derivation."""
+    scene = steel_chain_scene(12)
+    c = impactgen.simulate(scene).summary
+    ref = impactgen.simulate(scene, engine="reference").summary
+    for key in ("delta_max", "delta_r", "P_max", "T0", "Tf"):
+        assert c[key] == pytest.approx(ref[key], rel=1e-5), key
+    assert c["u_final"] == pytest.approx(ref["u_final"], rel=1e-5, abs=1e-8)
