@@ -88,3 +88,18 @@ def test_sweep_benchmark_reports_overhead_and_the_cluster_run():
     assert [r["verdict"] for r in rows][1:] == ["met", "met"]
     text = "\n".join(bench_sweep.sweep_report_lines(result))
     assert "impacts/s" in text and "dask scheduler + 2 dask worker" in text
+
+
+def test_the_pure_c_loop_is_measured_beside_the_python_api(monkeypatch):
+    from impactgen.bench import cloop
+    monkeypatch.setattr(cloop, "C_REPEATS", 20)
+    monkeypatch.setattr(cloop, "PY_BLOCK", 5)
+    monkeypatch.setattr(cloop, "ROUNDS", 1)
+    monkeypatch.setattr(cloop, "_instructions_per_step", lambda driver, folder: {"instructions_per_step": 1.0,
+                                                                               "steps": 1, "instructions_per_run": 1.0})
+    result = cloop.c_loop("paper")
+    assert result["c_ms"] > 0 and result["python_ms"] > 0
+    assert result["ratio"] == result["python_ms"] / result["c_ms"]
+    from impactgen.bench.report import targets
+    rows = targets([], [], [], result)
+    assert [r["verdict"] for r in rows if r["target"].startswith("speed 2")] == ["met" if result["ratio"] <= 1.5 else "missed"]

@@ -7,13 +7,16 @@
  * Build (from the repository root; see examples/c/Makefile and docs/embedding.md):
  *     make -C examples/c MODEL=../../generated/paper-double-pendulum
  * Run:
- *     examples/c/impact_driver
- * It prints the run's summary as "name value" lines, in the units of `impactgen run`.
+ *     examples/c/impact_driver              # the run's summary as "name value" lines
+ *     examples/c/impact_driver --repeat 500 # and the wall time per run, warm (impactgen bench)
+ * The summary is in the units of `impactgen run`.
  */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "cvode_glue.h"
 #include "model_scene.h"
@@ -31,25 +34,97 @@ static double output(const model_params *p, double t, const double *y, int which
     return out[which];
 }
 
-int main(void)
+typedef struct {
+    const char *status;
+    int impacts;
+    double t;
+    double y[MODEL_NSTATE], y_start[MODEL_NSTATE];
+    impact_record first;
+} run_summary;
+
+/* One run of the scene from its start, on solver s (created, or reset, with the scene's
+ * tolerances): the machine, segment by segment, as impactgen's Python wrapper runs it. */
+static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_summary *r)
+{
+    static double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE];
+    model_params p = *inputs;
+    double atol[MODEL_NSTATE];
+    model_machine m;
+    memset(r, 0, sizeof *r);
+    r->status = "ok";
+    memcpy(r->y, y0, sizeof r->y);
+    const int start = model_machine_start(&m, &p, r->t, r->y, MODEL_SCENE_RUN_TO_TIME);
+    if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) {
+        r->status = "no-impact";
+        return;
+    }
+    model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
+    ig_solver_set_atol(s, atol);
+    if (start == MODEL_START_CONTACT) {
+        r->first.T_before = output(&p, r->t, r->y, MODEL_OUT_T);
+        memcpy(r->y_start, r->y, sizeof r->y);
+        r->impacts = 1;
+    }
+    for (;;) {
+        int events[MODEL_NEVENT], directions[MODEL_NEVENT], fired[MODEL_NEVENT];
+        const int watched = model_machine_events(&m, events, directions);
+        if (MODEL_HAS_JACOBIAN) ig_solver_use_jacobian(s, !model_machine_constrained(&m));
+        if (ig_segment_start(s, &p, r->t, r->y, MODEL_SCENE_T_END, events, directions, watched) < 0) {
+            r->status = "failed";
+            return;
+        }
+        int flag, n = 0;
+        do {
+            flag = ig_segment_advance(s, t_buf, y_buf, NULL, CAPACITY, &n, fired);
+            if (n > 0) {
+                r->t = t_buf[n - 1];
+                memcpy(r->y, y_buf + (size_t)(n - 1) * MODEL_NSTATE, sizeof r->y);
+            }
+        } while (flag == IG_BUFFER_FULL);
+        if (flag < 0) {
+            fprintf(stderr, "CVODE failed in %s at t = %g: %s\n", model_machine_state_name(m.state), r->t,
+                    ig_solver_message(s));
+            r->status = "failed";
+            return;
+        }
+        if (flag != IG_ROOT) return;  /* the end time */
+        const int act = model_machine_switch(&m, &p, r->t, r->y, fired);
+        if ((act & MODEL_ACT_IMPACT_BEGIN) && ++r->impacts == 1) {
+            r->first.t_start = r->t;
+            r->first.T_before = output(&p, r->t, r->y, MODEL_OUT_T);
+            memcpy(r->y_start, r->y, sizeof r->y);
+        }
+        if ((act & MODEL_ACT_MAX_COMPRESSION) && r->impacts == 1) {
+            r->first.delta_max = m.delta_max;
+            r->first.P_max = m.P_max;
+            r->first.delta_r = m.delta_r;
+            r->first.R_res = m.R_res;
+        }
+        if ((act & MODEL_ACT_IMPACT_END) && r->impacts == 1) {
+            r->first.t_end = r->t;
+            r->first.T_after = output(&p, r->t, r->y, MODEL_OUT_T);
+        }
+        if (act & MODEL_ACT_END) return;
+        if (act & MODEL_ACT_TOLERANCES) {
+            model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
+            ig_solver_set_atol(s, atol);
+        }
+    }
+}
+
+int main(int argc, char **argv)
 {
     model_params p = {0};
-    double y[MODEL_NSTATE], atol[MODEL_NSTATE], y_start[MODEL_NSTATE] = {0};
+    double y0[MODEL_NSTATE], atol[MODEL_NSTATE];
     const char *range = "";
-    model_scene_inputs(&p, y);
+    const long repeat = argc == 3 && strcmp(argv[1], "--repeat") == 0 ? strtol(argv[2], NULL, 10) : 0;
+    model_scene_inputs(&p, y0);
     const int bad = model_derive(&p, &range);
     if (bad != MODEL_PARAMS_OK) {
         fprintf(stderr, "%s = %g is outside %s\n", model_param_key(bad), *model_param_slot(&p, bad), range);
         return 2;
     }
-    model_machine m;
-    double t = 0.0;
-    const int start = model_machine_start(&m, &p, t, y, MODEL_SCENE_RUN_TO_TIME);
-    if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) {
-        printf("status no-impact\n");
-        return 0;
-    }
-    model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
+    for (int k = 0; k < MODEL_NSTATE; ++k) atol[k] = MODEL_SCENE_ATOL;
     char err[512];
     ig_solver *s = ig_solver_new(MODEL_SCENE_METHOD, MODEL_HAS_JACOBIAN, MODEL_SCENE_RTOL, atol,
                                  MODEL_SCENE_MAX_STEPS, err, (int)sizeof err);
@@ -57,69 +132,25 @@ int main(void)
         fprintf(stderr, "cannot create CVODE: %s\n", err);
         return 4;
     }
-    static double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE];
-    impact_record first = {0};
-    int n_impacts = 0;
-    if (start == MODEL_START_CONTACT) {
-        first.t_start = t;
-        first.T_before = output(&p, t, y, MODEL_OUT_T);
-        for (int k = 0; k < MODEL_NSTATE; ++k) y_start[k] = y[k];
-        n_impacts = 1;
-    }
-    const char *status = "ok";
-    for (;;) {
-        int events[MODEL_NEVENT], directions[MODEL_NEVENT], fired[MODEL_NEVENT];
-        const int watched = model_machine_events(&m, events, directions);
-        if (MODEL_HAS_JACOBIAN) ig_solver_use_jacobian(s, !model_machine_constrained(&m));
-        if (ig_segment_start(s, &p, t, y, MODEL_SCENE_T_END, events, directions, watched) < 0) {
-            status = "failed";
-            break;
-        }
-        int flag, n = 0;
-        do {
-            flag = ig_segment_advance(s, t_buf, y_buf, NULL, CAPACITY, &n, fired);
-            if (n > 0) {
-                t = t_buf[n - 1];
-                for (int k = 0; k < MODEL_NSTATE; ++k) y[k] = y_buf[(n - 1) * MODEL_NSTATE + k];
-            }
-        } while (flag == IG_BUFFER_FULL);
-        if (flag < 0) {
-            fprintf(stderr, "CVODE failed in %s at t = %g: %s\n", model_machine_state_name(m.state), t,
-                    ig_solver_message(s));
-            status = "failed";
-            break;
-        }
-        if (flag != IG_ROOT) break;  /* the end time */
-        const int act = model_machine_switch(&m, &p, t, y, fired);
-        if (act & MODEL_ACT_IMPACT_BEGIN) {
-            if (++n_impacts == 1) {
-                first.t_start = t;
-                first.T_before = output(&p, t, y, MODEL_OUT_T);
-                for (int k = 0; k < MODEL_NSTATE; ++k) y_start[k] = y[k];
-            }
-        }
-        if ((act & MODEL_ACT_MAX_COMPRESSION) && n_impacts == 1) {
-            first.delta_max = m.delta_max;
-            first.P_max = m.P_max;
-            first.delta_r = m.delta_r;
-            first.R_res = m.R_res;
-        }
-        if ((act & MODEL_ACT_IMPACT_END) && n_impacts == 1) {
-            first.t_end = t;
-            first.T_after = output(&p, t, y, MODEL_OUT_T);
-        }
-        if (act & MODEL_ACT_END) break;
-        if (act & MODEL_ACT_TOLERANCES) {
-            model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
-            ig_solver_set_atol(s, atol);
-        }
-    }
+    run_summary r;
+    run_scene(s, &p, y0, &r);
     ig_stats stats;
     ig_solver_stats(s, &stats);
+    if (repeat > 0) {  /* warm runs, each from a reset solver (as a warm Python process reuses one) */
+        struct timespec a, b;
+        clock_gettime(CLOCK_MONOTONIC, &a);
+        for (long k = 0; k < repeat; ++k) {
+            ig_solver_reset(s, MODEL_SCENE_RTOL, atol, MODEL_SCENE_MAX_STEPS);
+            run_scene(s, &p, y0, &r);
+        }
+        clock_gettime(CLOCK_MONOTONIC, &b);
+        printf("ms_per_run %.6f\n", ((b.tv_sec - a.tv_sec) * 1e3 + (b.tv_nsec - a.tv_nsec) * 1e-6) / (double)repeat);
+    }
+    const impact_record first = r.first;
     printf("scene %s\n", MODEL_SCENE_NAME);
-    printf("status %s\n", status);
-    printf("impacts %d\n", n_impacts);
-    printf("t_final %.17g\n", t);
+    printf("status %s\n", r.status);
+    printf("impacts %d\n", r.impacts);
+    printf("t_final %.17g\n", r.t);
     printf("T0 %.17g\n", first.T_before);
     printf("Tf %.17g\n", first.T_after);
     printf("delta_max %.17g\n", first.delta_max);
@@ -127,11 +158,11 @@ int main(void)
     printf("P_max %.17g\n", first.P_max);
     printf("R_res %.17g\n", first.R_res);
     printf("t_contact %.17g\n", first.t_end - first.t_start);
-    for (int i = 0; i < MODEL_NQ; ++i) printf("q_final[%d] %.17g\n", i + 1, y[i]);
-    for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, y[MODEL_NQ + i]);
-    printf("W_normal %.17g\n", y[2 * MODEL_NQ] - y_start[2 * MODEL_NQ]);
-    if (MODEL_NSTATE > 2 * MODEL_NQ + 1) printf("W_friction %.17g\n", y[MODEL_NSTATE - 1] - y_start[MODEL_NSTATE - 1]);
+    for (int i = 0; i < MODEL_NQ; ++i) printf("q_final[%d] %.17g\n", i + 1, r.y[i]);
+    for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, r.y[MODEL_NQ + i]);
+    printf("W_normal %.17g\n", r.y[2 * MODEL_NQ] - r.y_start[2 * MODEL_NQ]);
+    if (MODEL_NSTATE > 2 * MODEL_NQ + 1) printf("W_friction %.17g\n", r.y[MODEL_NSTATE - 1] - r.y_start[MODEL_NSTATE - 1]);
     printf("steps %ld\n", stats.nsteps);
     ig_solver_free(s);
-    return strcmp(status, "ok") == 0 ? 0 : 4;
+    return strcmp(r.status, "ok") == 0 || strcmp(r.status, "no-impact") == 0 ? 0 : 4;
 }

@@ -17,6 +17,10 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     from .workprecision import FULL, QUICK, run_workprecision
     started = time.perf_counter()
     runs, truths, notes = run_workprecision(QUICK if quick else FULL) if "workprecision" in parts else ([], [], [])
+    c_loop = {}
+    if "workprecision" in parts:
+        from .cloop import c_loop as measure_c_loop
+        c_loop = measure_c_loop()
     rhs_rows = rhs_benchmark((2, 3, 5) if quick else (2, 3, 5, 10, 20)) if "rhs" in parts else []
     scaling_rows = scaling(QUICK_LINKS if quick else FULL_LINKS) if "scaling" in parts else []
     sweep_result = {}
@@ -24,4 +28,4 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
         from .sweep import sweep_benchmark
         sweep_result = sweep_benchmark(quick)
     return write_report(out, "quick" if quick else "full", runs, truths, notes, rhs_rows, scaling_rows,
-                        time.perf_counter() - started, sweep_result)
+                        time.perf_counter() - started, sweep_result, c_loop)

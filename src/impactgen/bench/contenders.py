@@ -187,7 +187,7 @@ def available_contenders() -> tuple[list[Contender], list[str]]:
     """Every contender whose packages import, and a note for each one left out."""
     contenders = [cvode("bdf"), cvode("adams")]
     contenders += [scipy_with_c(m) for m in ("LSODA", "Radau", "DOP853", "RK45")]
-    contenders.append(pure_python("Radau"))
+    contenders += [pure_python("Radau"), pure_python("LSODA")]  # the reference engine's fastest, whichever
     notes = []
     try:
         import sksundae  # noqa: F401
