@@ -116,10 +116,30 @@ def fmu_sources(scene: Scene, kind: str = "both") -> FmuSources:
 
 
 def build_fmu(scene: Scene, out: Path, kind: str = "both") -> Path:
-    """Write `out` (an .fmu) for `scene`. `kind`: "me", "cs" or "both".
+    """Write an FMI 2.0 FMU of `scene`, which any FMI importer can simulate.
 
-    Raises BuildError when the compiler or, for Co-Simulation, SUNDIALS' static libraries
-    are missing."""
+    Parameters
+    ----------
+    scene : Scene
+        The scene: its structure picks the model, its values are the parameters' start values.
+    out : path
+        The .fmu file to write (written aside, then renamed into place).
+    kind : {"both", "me", "cs"}
+        Model Exchange (the importer's solver integrates), Co-Simulation (CVODE inside), or both.
+
+    Returns
+    -------
+    Path
+        `out`.
+
+    Raises
+    ------
+    SceneError
+        For an unknown `kind`.
+    BuildError
+        When no C compiler is found or, for Co-Simulation, SUNDIALS' static libraries are
+        missing; the message says what to install.
+    """
     built = fmu_sources(scene, kind)
     identifier, cs = built.identifier, "FMU_CO_SIMULATION" in built.defines
     with tempfile.TemporaryDirectory(prefix="impactgen-fmu-") as tmp:
