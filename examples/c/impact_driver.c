@@ -21,6 +21,8 @@
 #include "cvode_glue.h"
 #include "model_scene.h"
 
+/* the analytic Jacobian, when the model has one and the method is implicit */
+#define USE_JACOBIAN (MODEL_HAS_JACOBIAN && MODEL_SCENE_METHOD != IG_METHOD_ERK)
 #define CAPACITY 256  /* samples per call; the driver keeps only the last one */
 
 typedef struct {
@@ -68,7 +70,7 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
     for (;;) {
         int events[MODEL_NEVENT], directions[MODEL_NEVENT], fired[MODEL_NEVENT];
         const int watched = model_machine_events(&m, events, directions);
-        if (MODEL_HAS_JACOBIAN) ig_solver_use_jacobian(s, !model_machine_constrained(&m));
+        if (USE_JACOBIAN) ig_solver_use_jacobian(s, !model_machine_constrained(&m));
         if (ig_segment_start(s, &p, r->t, r->y, MODEL_SCENE_T_END, events, directions, watched) < 0) {
             r->status = "failed";
             return;
@@ -126,7 +128,7 @@ int main(int argc, char **argv)
     }
     for (int k = 0; k < MODEL_NSTATE; ++k) atol[k] = MODEL_SCENE_ATOL;
     char err[512];
-    ig_solver *s = ig_solver_new(MODEL_SCENE_METHOD, MODEL_HAS_JACOBIAN, MODEL_SCENE_RTOL, atol,
+    ig_solver *s = ig_solver_new(MODEL_SCENE_METHOD, USE_JACOBIAN, MODEL_SCENE_RTOL, atol,
                                  MODEL_SCENE_MAX_STEPS, err, (int)sizeof err);
     if (!s) {
         fprintf(stderr, "cannot create CVODE: %s\n", err);

@@ -21,7 +21,7 @@ from .errors import SolverError
 from .model_params import fill_params
 from .results import Impact, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
-from .session import CvodeSession
+from .session import CvodeSession, uses_jacobian
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 STICK_EXCESS = THRESHOLD["STICK_EXCESS"]
@@ -91,7 +91,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         impacts.append(Impact(t_start=t, i_start=0))
         session.set_atol(machine.atol(scene))
     status, message = "ok", ""
-    analytic = bool(model.spec.jacobian)
+    analytic = uses_jacobian(model, scene)
 
     def outputs_at(t_now: np.ndarray, y_rows: np.ndarray) -> dict[str, np.ndarray]:
         return dict(zip(model.output_names, session.outputs(params, t_now, y_rows).T))

@@ -26,7 +26,7 @@ from .errors import SceneError
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 CONTACT_MODELS = ("three-phase", "hertz")
 FRICTION_MODES = ("regularized", "coulomb")
-METHODS = ("bdf", "adams")
+METHODS = ("bdf", "adams", "erk")  # CVODE BDF, CVODE Adams, ARKODE explicit Runge-Kutta (the glue's IG_METHOD_*)
 JACOBIANS = ("auto", "analytic", "difference")
 # "auto" emits the analytic Jacobian for BDF up to this many links. Above it, the Jacobian's
 # symbolic and compile cost (n = 10: +10 s, n = 20: +3 min) buys no measurable speed, since

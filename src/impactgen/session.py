@@ -11,7 +11,7 @@ import numpy as np
 
 from .build import CompiledModel
 from .errors import SolverError
-from .scene import Scene
+from .scene import METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a segment keeps filling it
 
@@ -45,8 +45,8 @@ class CvodeSession:
         self.model = model
         ffi, lib = model.ffi, model.lib
         err = ffi.new("char[]", 512)
-        method = 0 if scene.solver.method == "bdf" else 1
-        analytic = 1 if model.spec.jacobian else 0
+        method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK
+        analytic = 1 if uses_jacobian(model, scene) else 0
         solver = lib.ig_solver_new(method, analytic, scene.solver.rtol, atol, scene.solver.max_steps, err, 512)
         if solver == ffi.NULL:
             raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
@@ -144,6 +144,12 @@ class CvodeSession:
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
         return likely_cause(text or "CVODE failed without a message")
+
+
+def uses_jacobian(model: CompiledModel, scene: Scene) -> bool:
+    """Whether CVODE gets the model's analytic Jacobian: the model has one and the method is
+    implicit (the explicit Runge-Kutta pair uses none)."""
+    return bool(model.spec.jacobian) and scene.solver.method != "erk"
 
 
 def likely_cause(message: str) -> str:

@@ -130,7 +130,7 @@ def find_sundials() -> Sundials:
         if major < 6:
             raise BuildError(f"SUNDIALS {version} found in {include} is too old: impactgen "
                              f"needs 6.x or 7.x; {INSTALL_HINT}")
-        libs = ["sundials_cvode", "sundials_nvecserial", "sundials_sunmatrixdense",
+        libs = ["sundials_cvode", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
                 "sundials_sunlinsoldense"]
         lib_dir = _library_dir(prefix, "sundials_cvode")
         if lib_dir is None:

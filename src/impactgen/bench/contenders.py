@@ -64,7 +64,8 @@ def _budgeted(model: ReferenceModel, budget: int) -> ReferenceModel:
 def cvode(method: str) -> Contender:
     def run(scene: Scene, rtol: float, budget: int) -> SimulationResult:
         return simulate(with_tolerance(scene, rtol, method=method, max_steps=budget), engine="c")
-    return Contender(f"CVODE {method.upper()} (impactgen C)", "impactgen", run)
+    name = "ARKODE ERK 5(4)" if method == "erk" else f"CVODE {method.upper()}"
+    return Contender(f"{name} (impactgen C)", "impactgen", run)
 
 
 # ----------------------------------------------------------------------------- scipy + C
@@ -185,7 +186,7 @@ def pydy_codegen(generator: str = "cython", method: str = "LSODA") -> Contender:
 
 def available_contenders() -> tuple[list[Contender], list[str]]:
     """Every contender whose packages import, and a note for each one left out."""
-    contenders = [cvode("bdf"), cvode("adams")]
+    contenders = [cvode("bdf"), cvode("adams"), cvode("erk")]
     contenders += [scipy_with_c(m) for m in ("LSODA", "Radau", "DOP853", "RK45")]
     contenders += [pure_python("Radau"), pure_python("LSODA")]  # the reference engine's fastest, whichever
     notes = []

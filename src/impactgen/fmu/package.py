@@ -194,7 +194,7 @@ def _build_description(identifier: str, c_files: list[str], defines: list[str], 
     files = "\n".join(f'      <SourceFile name="{f}"/>' for f in c_files)
     defs = "\n".join(f'      <PreprocessorDefinition name="{d}"/>' for d in defines)
     libs = ("\n" + "\n".join(f'      <Library name="{lib}"/>' for lib in
-                             ("sundials_cvode", "sundials_nvecserial", "sundials_sunmatrixdense",
+                             ("sundials_cvode", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
                               "sundials_sunlinsoldense"))) if cs else ""
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiBuildDescription fmiVersion="2.0">

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <arkode/arkode_erkstep.h>
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_types.h>
@@ -28,6 +29,7 @@
 struct ig_solver {
     SUNContext ctx;
     void *cvode;
+    void *erk;        /* ARKODE ERKStep instead of CVODE (method IG_METHOD_ERK): explicit Runge-Kutta */
     N_Vector y;
     N_Vector abstol;
     N_Vector dky;     /* one derivative of the interpolating polynomial (dense output) */
@@ -81,6 +83,12 @@ static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
     return model_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), s->params);
 }
 
+/* the explicit Runge-Kutta pair: Dormand and Prince's 5(4), 7 stages with the last one reused
+ * (ARKODE's table; in work-precision runs on the paper's impact it beat Verner's 6(5) and
+ * Fehlberg's 7(8), which failed at rtol 1e-8) */
+#define IG_ERK_TABLE ARKODE_DORMAND_PRINCE_7_4_5
+#define IG_ERK_DENSE_DEGREE 5  /* Hermite interpolant of ERK steps (ARK_INTERP_MAX_DEGREE) */
+
 static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *user_data)
 {
     const ig_solver *s = (const ig_solver *)user_data;
@@ -110,6 +118,14 @@ static void add_counters(const ig_solver *s, ig_stats *st)
 {
     long v;
     if (!s->initialised || s->counted) return;
+    if (s->erk) {
+        long nfe = 0;
+        if (ERKStepGetNumSteps(s->erk, &v) == ARK_SUCCESS) st->nsteps += v;
+        if (ERKStepGetNumRhsEvals(s->erk, &nfe) == ARK_SUCCESS) st->nfev += nfe;
+        if (ERKStepGetNumErrTestFails(s->erk, &v) == ARK_SUCCESS) st->netfails += v;
+        if (ERKStepGetNumGEvals(s->erk, &v) == ARK_SUCCESS) st->ngev += v;
+        return;
+    }
     if (CVodeGetNumSteps(s->cvode, &v) == CV_SUCCESS) st->nsteps += v;
     if (CVodeGetNumRhsEvals(s->cvode, &v) == CV_SUCCESS) st->nfev += v;
     if (CVodeGetNumJacEvals(s->cvode, &v) == CV_SUCCESS) st->njev += v;
@@ -123,6 +139,7 @@ void ig_solver_free(ig_solver *s)
 {
     if (!s) return;
     if (s->cvode) CVodeFree(&s->cvode);
+    if (s->erk) ERKStepFree(&s->erk);
     if (s->LS) SUNLinSolFree(s->LS);
     if (s->A) SUNMatDestroy(s->A);
     if (s->y) N_VDestroy(s->y);
@@ -142,7 +159,8 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         snprintf(err, (size_t)errlen, "out of memory");
         return NULL;
     }
-    if (method != 0 && method != 1) failed = "method must be 0 (BDF) or 1 (Adams)";
+    if (method < IG_METHOD_BDF || method > IG_METHOD_ERK) failed = "method must be 0 (BDF), 1 (Adams) or 2 (ERK)";
+    else if (method == IG_METHOD_ERK && analytic_jacobian) failed = "an explicit method uses no Jacobian";
     else if (!(rtol > 0.0) || max_steps <= 0) failed = "rtol and max_steps must be positive";
     else if (analytic_jacobian && !MODEL_HAS_JACOBIAN) failed = "this model was generated without its Jacobian";
 #if SUNDIALS_VERSION_MAJOR >= 7
@@ -163,9 +181,16 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         if (s->y) s->A = SUNDenseMatrix(MODEL_NSTATE, MODEL_NSTATE, s->ctx);
         if (s->A) s->LS = SUNLinSol_Dense(s->y, s->A, s->ctx);
         if (s->LS) ig_use_small_kernels(s->y, s->A, s->LS);
-        s->cvode = CVodeCreate(method == 0 ? CV_BDF : CV_ADAMS, s->ctx);
-        s->dense_terms = (method == 0 ? IG_BDF_MAX_ORDER : IG_ADAMS_MAX_ORDER) + 1;
-        if (!s->y || !s->abstol || !s->dky || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
+        if (method == IG_METHOD_ERK) {
+            if (s->y) N_VConst(0.0, s->y);
+            if (s->y) s->erk = ERKStepCreate(rhs, 0.0, s->y, s->ctx);
+            s->dense_terms = IG_ERK_DENSE_DEGREE + 1;
+            if (!s->y || !s->abstol || !s->dky || !s->erk) failed = "allocating ARKODE failed";
+        } else {
+            s->cvode = CVodeCreate(method == IG_METHOD_BDF ? CV_BDF : CV_ADAMS, s->ctx);
+            s->dense_terms = (method == IG_METHOD_BDF ? IG_BDF_MAX_ORDER : IG_ADAMS_MAX_ORDER) + 1;
+            if (!s->y || !s->abstol || !s->dky || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
+        }
     }
     if (!failed) {
         double *a = N_VGetArrayPointer(s->abstol);
@@ -174,7 +199,16 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
             a[k] = atol[k];
         }
     }
-    if (!failed) {
+    if (!failed && s->erk) {
+#if SUNDIALS_VERSION_MAJOR < 7
+        ERKStepSetErrHandlerFn(s->erk, on_error, s);
+#endif
+        if (ERKStepSVtolerances(s->erk, rtol, s->abstol) != ARK_SUCCESS) failed = "ERKStepSVtolerances failed";
+        else if (ERKStepSetUserData(s->erk, s) != ARK_SUCCESS) failed = "ERKStepSetUserData failed";
+        else if (ERKStepSetTableNum(s->erk, IG_ERK_TABLE) != ARK_SUCCESS) failed = "ERKStepSetTableNum failed";
+        else if (ERKStepSetInterpolantDegree(s->erk, IG_ERK_DENSE_DEGREE) != ARK_SUCCESS) failed = "ERKStepSetInterpolantDegree failed";
+        else if (ERKStepSetMaxNumSteps(s->erk, -1) != ARK_SUCCESS) failed = "ERKStepSetMaxNumSteps failed";
+    } else if (!failed) {
 #if SUNDIALS_VERSION_MAJOR < 7
         CVodeSetErrHandlerFn(s->cvode, on_error, s);
 #endif
@@ -243,6 +277,7 @@ int ig_solver_set_atol(ig_solver *s, const double *atol)
 
 int ig_solver_use_jacobian(ig_solver *s, int analytic)
 {
+    if (s->erk) return analytic ? IG_ERR_USAGE : 0;
     if (analytic == s->analytic_in_use) return 0;
     if (analytic && !s->jac) {
         set_message(s, "ig_solver_use_jacobian: the solver was created without the analytic Jacobian");
@@ -280,6 +315,23 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
     s->message[0] = '\0';
 
     memcpy(N_VGetArrayPointer(s->y), y0, sizeof(double) * MODEL_NSTATE);
+    if (s->erk) {
+        if (ERKStepReInit(s->erk, rhs, t0, s->y) != ARK_SUCCESS) return IG_ERR_SOLVER;
+        if (s->atol_changed) {
+            if (ERKStepSVtolerances(s->erk, s->rtol, s->abstol) != ARK_SUCCESS) return IG_ERR_SOLVER;
+            s->atol_changed = 0;
+        }
+        if (ERKStepRootInit(s->erk, nevents, nevents > 0 ? roots : NULL) != ARK_SUCCESS) return IG_ERR_SOLVER;
+        if (nevents > 0) {
+            int dirs[MODEL_NEVENT];
+            for (int k = 0; k < nevents; ++k) dirs[k] = directions[k];
+            if (ERKStepSetRootDirection(s->erk, dirs) != ARK_SUCCESS) return IG_ERR_SOLVER;
+            if (ERKStepSetNoInactiveRootWarn(s->erk) != ARK_SUCCESS) return IG_ERR_SOLVER;
+        }
+        if (ERKStepSetStopTime(s->erk, t_stop) != ARK_SUCCESS) return IG_ERR_SOLVER;
+        s->active = 1;
+        return 0;
+    }
     if (CVodeReInit(s->cvode, t0, s->y) != CV_SUCCESS) return IG_ERR_SOLVER;
     if (s->atol_changed) {
         if (CVodeSVtolerances(s->cvode, s->rtol, s->abstol) != CV_SUCCESS) return IG_ERR_SOLVER;
@@ -299,10 +351,16 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
 /* The Taylor coefficients y^(k)(t) / k!, k = 0 .. dense_terms - 1, of CVODE's interpolating
  * polynomial of the last step, at t (zero past the order the step used). The polynomial has
  * that order, so the expansion reproduces it exactly over the step [t_n - h_u, t_n]. */
+static int get_dky(ig_solver *s, double t, int k)
+{
+    if (s->erk) return ERKStepGetDky(s->erk, t, k, s->dky) == ARK_SUCCESS ? 0 : -1;
+    return CVodeGetDky(s->cvode, t, k, s->dky) == CV_SUCCESS ? 0 : -1;
+}
+
 static int write_dense(ig_solver *s, double t, double *out)
 {
-    int order = 0;
-    if (CVodeGetLastOrder(s->cvode, &order) != CV_SUCCESS) return -1;
+    int order = IG_ERK_DENSE_DEGREE;
+    if (!s->erk && CVodeGetLastOrder(s->cvode, &order) != CV_SUCCESS) return -1;
     const double *dky = N_VGetArrayPointer(s->dky);
     double factorial = 1.0;
     int failed = 0;
@@ -313,7 +371,7 @@ static int write_dense(ig_solver *s, double t, double *out)
             continue;
         }
         if (k > 0) factorial *= k;
-        if (CVodeGetDky(s->cvode, t, k, s->dky) != CV_SUCCESS) {
+        if (get_dky(s, t, k) != 0) {
             failed = 1;
             memset(row, 0, sizeof(double) * MODEL_NSTATE);
             continue;
@@ -325,7 +383,7 @@ static int write_dense(ig_solver *s, double t, double *out)
 
 int ig_interpolate(ig_solver *s, double t, double *y)
 {
-    if (CVodeGetDky(s->cvode, t, 0, s->dky) != CV_SUCCESS) {
+    if (get_dky(s, t, 0) != 0) {
         set_message(s, "ig_interpolate: t lies outside the last step");
         return IG_ERR_USAGE;
     }
@@ -354,7 +412,8 @@ int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense
             return IG_ERR_TOO_MUCH_WORK;
         }
         sunrealtype t;
-        int flag = CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);
+        int flag = s->erk ? ERKStepEvolve(s->erk, s->t_stop, s->y, &t, ARK_ONE_STEP)
+                          : CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);
         if (flag < 0) {
             s->active = 0;
             if (!s->message[0]) snprintf(s->message, sizeof s->message, "CVode returned %d", flag);
@@ -371,8 +430,9 @@ int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense
             return IG_ERR_SOLVER;
         }
         (*n_written)++;
-        if (flag == CV_ROOT_RETURN) {
-            CVodeGetRootInfo(s->cvode, roots_found);
+        if (flag == CV_ROOT_RETURN) {  /* ARK_ROOT_RETURN has the same value */
+            if (s->erk) ERKStepGetRootInfo(s->erk, roots_found);
+            else CVodeGetRootInfo(s->cvode, roots_found);
             s->active = 0;
             return IG_ROOT;
         }

@@ -19,6 +19,10 @@
 #define IG_ERR_SOLVER -1     /* CVODE failed: ig_solver_message says why */
 #define IG_ERR_TOO_MUCH_WORK -2  /* more than max_steps steps in this segment */
 #define IG_ERR_USAGE -3      /* bad arguments (a bug in the caller) */
+/* Methods of ig_solver_new: CVODE's BDF and Adams, or ARKODE's explicit Runge-Kutta pair. */
+#define IG_METHOD_BDF 0
+#define IG_METHOD_ADAMS 1
+#define IG_METHOD_ERK 2
 /* CVODE's default maximum orders: dense output keeps max order + 1 coefficients a sample. */
 #define IG_BDF_MAX_ORDER 5
 #define IG_ADAMS_MAX_ORDER 12
@@ -35,8 +39,9 @@ typedef struct {
     long ngev;       /* root function calls */
 } ig_stats;
 
-/* method: 0 = BDF, 1 = Adams; analytic_jacobian: 1 to give CVODE model_jacobian (the model
- * must have one), 0 for CVODE's difference quotients. atol has MODEL_NSTATE entries.
+/* method: IG_METHOD_BDF, IG_METHOD_ADAMS (CVODE) or IG_METHOD_ERK (ARKODE ERKStep, Dormand and
+ * Prince's 5(4) pair, for non-stiff problems); analytic_jacobian: 1 to give CVODE model_jacobian (the
+ * model must have one; not with ERK), 0 for CVODE's difference quotients. atol has MODEL_NSTATE entries.
  * Returns NULL on failure with a message in err (errlen bytes). */
 ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const double *atol,
                          long max_steps, char *err, int errlen);

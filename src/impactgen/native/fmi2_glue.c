@@ -34,6 +34,8 @@
 #endif
 
 enum mode { INSTANTIATED, INITIALIZATION, EVENT, CONTINUOUS, STEPPING, TERMINATED, FAILED };
+/* the analytic Jacobian, when the model has one and the method is implicit */
+#define USE_JACOBIAN (MODEL_HAS_JACOBIAN && MODEL_SCENE_METHOD != IG_METHOD_ERK)
 #define FAR_FUTURE 1e30  /* the end of a run with no stop time */
 #define STOP_SLACK 1e-9  /* a last step may pass the stop time by this much (relative): rounding of t + h */
 #define STEP_CAPACITY 1  /* CVODE steps per call of the glue: one, to stop past a communication point */
@@ -262,7 +264,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
         double atol[MODEL_NSTATE];
         char err[256];
         model_machine_atol(&c->m, &c->p, c->rtol, MODEL_SCENE_ATOL, atol);
-        c->solver = ig_solver_new(MODEL_SCENE_METHOD, MODEL_HAS_JACOBIAN, c->rtol, atol, MODEL_SCENE_MAX_STEPS,
+        c->solver = ig_solver_new(MODEL_SCENE_METHOD, USE_JACOBIAN, c->rtol, atol, MODEL_SCENE_MAX_STEPS,
                                   err, (int)sizeof err);
         if (!c->solver) {
             c->mode = FAILED;
@@ -637,7 +639,7 @@ static fmi2Status start_segment(instance *c)
 {
     int events[MODEL_NEVENT], directions[MODEL_NEVENT];
     const int watched = model_machine_events(&c->m, events, directions);
-    if (MODEL_HAS_JACOBIAN) ig_solver_use_jacobian(c->solver, !model_machine_constrained(&c->m));
+    if (USE_JACOBIAN) ig_solver_use_jacobian(c->solver, !model_machine_constrained(&c->m));
     const double t_stop = c->stop_time + STOP_SLACK * fmax(1.0, fabs(c->stop_time));
     if (ig_segment_start(c->solver, &c->p, c->t_int, c->y_int, t_stop, events, directions, watched) < 0) {
         c->mode = FAILED;
