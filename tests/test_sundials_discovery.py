@@ -9,8 +9,8 @@ import pytest
 from impactgen import sundials
 from impactgen.errors import BuildError
 
-LIBS = ("sundials_cvode", "sundials_nvecserial", "sundials_sunmatrixdense", "sundials_sunlinsoldense",
-        "sundials_core")
+LIBS = ("sundials_cvode", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
+        "sundials_sunlinsoldense", "sundials_core")
 
 
 def _prefix(root: Path, version: str, mpi_enabled: bool, mpi_beside: bool = False) -> Path:
