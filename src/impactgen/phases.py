@@ -26,6 +26,7 @@ from .session import CvodeSession, uses_jacobian
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 STICK_EXCESS = THRESHOLD["STICK_EXCESS"]
 SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
+STATE_NAMES = np.array(STATES)  # the phase label of each sample, by machine state
 
 
 class Machine:
@@ -72,7 +73,6 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     start = lib.model_machine_start(m, params, t, model.ffi.from_buffer("double[]", y), int(run_to_time))
     session = CvodeSession.open(model, scene, machine.atol(scene))
     session.keep_polynomials(dense_output or t_eval is not None)
-    out_index = {name: i for i, name in enumerate(model.output_names)}
     first_row = session.outputs(params, np.array([t]), y[None, :])
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         session.close(scene)
@@ -80,7 +80,8 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                                    started)
     t_end = scene.solver.t_end if run_to_time else scene.solver.t_max
 
-    ts, ys, outs, labels = [np.array([t])], [y[None, :]], [first_row], [(machine.phase, 1)]
+    ts, ys, outs = [np.array([t])], [y[None, :]], [first_row]
+    codes, counts = [m.state], [1]  # the machine state of each run of samples
     dense_breaks: list[float] = [t]
     dense_pieces: list[StepPolynomials] = []
     sampler = TimeSampler(t_eval) if t_eval is not None else None
@@ -101,7 +102,8 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         nonlocal n_samples
         seg_out = session.outputs(params, seg_t, seg_y)
         ts.append(seg_t), ys.append(seg_y), outs.append(seg_out)
-        labels.append((phase_now, len(seg_t)))
+        codes.append(STATES.index(phase_now))
+        counts.append(len(seg_t))
         n_samples += len(seg_t)
         if seg_d is not None and len(seg_t):
             piece = StepPolynomials(seg_t, seg_d)
@@ -129,7 +131,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                 raise
             seg_out = record(phase, seg_t, seg_y, seg_d)
             if slip_state == "stick":
-                _check_stick(seg_out, out_index, scene.contact.friction, phase, float(seg_t[-1]))
+                _check_stick(seg_out, model.output_names, scene.contact.friction, phase, float(seg_t[-1]))
             t, y = float(seg_t[-1]), seg_y[-1].copy()
             ended_by = [model.event_names[session.event_idx[k]] for k in range(n_events) if session.roots[k]]
             spans.append(PhaseSpan(phase, spans[-1].t1 if spans else 0.0, t,
@@ -159,7 +161,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
 
     trajectory = Trajectory(
         t=np.concatenate(ts), y=np.concatenate(ys),
-        phase=np.repeat(np.array([name for name, _ in labels]), [count for _, count in labels]),
+        phase=STATE_NAMES[np.repeat(codes, counts)],
         outputs={name: col for name, col in zip(model.output_names, np.concatenate(outs).T)},
     )
     stats = session.stats()
@@ -181,9 +183,9 @@ def _end_without_event(scene: Scene, impacts: list[Impact], phase: str) -> tuple
                   f"on the surface (phase {phase!r}); the summary's impact has no end")
 
 
-def _check_stick(out: np.ndarray, out_index: dict[str, int], mu: float, phase: str, t: float) -> None:
+def _check_stick(out: np.ndarray, output_names: tuple[str, ...], mu: float, phase: str, t: float) -> None:
     """A stuck tip never needs more than mu F: if it did, a slip event was missed."""
-    F, F_f = out[:, out_index["F"]], out[:, out_index["F_f"]]
+    F, F_f = out[:, output_names.index("F")], out[:, output_names.index("F_f")]
     excess = np.abs(F_f) - mu * F
     if np.max(excess) > STICK_EXCESS * mu * max(float(np.max(F)), 1e-300):
         raise SolverError("the stuck tip needed a friction force beyond mu F and no slip event "
