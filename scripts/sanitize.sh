@@ -74,5 +74,5 @@ export IMPACTGEN_SANITIZE=1 IMPACTGEN_CACHE_DIR="$work/cache"
 export ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 LD_PRELOAD="$asan" "$PY" -m pytest -q -p no:cacheprovider \
     tests/test_paper.py tests/test_phases.py tests/test_energy.py tests/test_coulomb.py \
-    tests/test_sustained.py tests/test_memory.py tests/test_api.py "$@"
+    tests/test_sustained.py tests/test_memory.py tests/test_api.py tests/test_methods.py "$@"
 echo "sanitize: clean"

@@ -50,7 +50,7 @@ def test_thousand_simulations_do_not_grow_memory(paper_scene):
 def test_glue_and_simulations_are_clean_under_sanitizers():
     res = subprocess.run(["bash", str(ROOT / "scripts" / "sanitize.sh"), "-k",
                           "matches_the_paper or no_phase_ends or free_flight or hertz_model or stuck_tip "
-                          "or static_equilibrium or t_eval_samples or partial_trajectory"],
+                          "or static_equilibrium or t_eval_samples or partial_trajectory or explicit_pair"],
                          capture_output=True, text=True, timeout=900,
                          env={**os.environ, "PYTHON": sys.executable})
     output = res.stdout + res.stderr
