@@ -308,3 +308,23 @@ def test_plot_and_trajectories_draw_the_paper_figures(tmp_path):
     paths = plot_sweep(drawn, SweepSpec.from_vary({"initial.u[2]": "uniform(-0.5,-0.1)"}, random=30),
                        tmp_path / "random")
     assert {p.name for p in paths} >= {"histograms.png", "scatter_delta_r.png"}
+
+
+def _sigterm_default(payload, chunk, options):
+    import signal as sg
+    return [{"case": i, "sigterm_default": sg.getsignal(sg.SIGTERM) == sg.SIG_DFL} for i, _ in chunk]
+
+
+def test_pool_workers_end_on_sigterm_whatever_the_driver_does_with_it():
+    """The command line turns SIGTERM into KeyboardInterrupt; a forked worker must not inherit
+    that, or a broken pool's terminate() leaves it alive and the pool's shutdown spins."""
+    import signal
+
+    from impactgen.sweep.execute import process_pool
+    saved = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    try:
+        rows = [r for chunk in process_pool(_sigterm_default, {}, None, [(i, {}) for i in range(4)], 2)
+                for r in chunk]
+    finally:
+        signal.signal(signal.SIGTERM, saved)
+    assert len(rows) == 4 and all(r["sigterm_default"] for r in rows)

@@ -9,6 +9,7 @@ its workers ends as rows with status "failed", so no case is ever missing from t
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import sys
 import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -21,6 +22,7 @@ CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep o
 MAX_CHUNK = 200  # cases: a lost chunk costs at most this much work again, and the last chunk to
 # finish keeps the other workers idle for at most this many cases
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
+ABANDON_JOIN_S = 5.0  # s to wait for each killed worker of a broken pool
 
 Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)
 RunChunk = Callable[[dict[str, Any], Chunk, Any], list[dict[str, Any]]]
@@ -49,7 +51,7 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
     queue = [(chunk, 0) for chunk in chunked(todo, workers)]
     while queue:
         retry: list[tuple[Chunk, int]] = []
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_start_method())
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_start_method(), initializer=_worker_signals)
         finished_normally = False
         pending: dict = {}
         sent = 0
@@ -74,8 +76,10 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
         finally:
             for future in list(pending):
                 future.cancel()
-            # interrupted (Ctrl-C, SIGTERM): return at once, the workers end after their chunk
-            pool.shutdown(wait=finished_normally, cancel_futures=True)
+            if retry:  # broken: never wait on it (its queue feeder can block on a dead worker's pipe)
+                _abandon(pool)
+            else:  # interrupted (Ctrl-C, SIGTERM): return at once, the workers end after their chunk
+                pool.shutdown(wait=finished_normally, cancel_futures=True)
         queue = []
         if retry:
             print(f"impactgen: a worker process died; running its {len(retry)} unfinished chunks "
@@ -85,6 +89,27 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
                 yield lost_rows(chunk, f"its worker process died {tries} times (out of memory, or killed)")
             else:
                 queue.append((chunk, tries))
+
+
+def _worker_signals() -> None:
+    """A worker ends on SIGTERM. A forked worker inherits the command line's SIGTERM handler,
+    which turns the signal into KeyboardInterrupt; the pool would then report that as a result
+    and the worker would live on, so that a broken pool's terminate() never ended it and the
+    pool's shutdown spun waiting for it (the sweep hung at 100 % CPU)."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _abandon(pool: ProcessPoolExecutor) -> None:
+    """Shut a broken pool down without waiting for it, and end the workers it still has: a
+    worker's death can leave the pool's feeder thread blocked on a pipe nobody reads, and
+    waiting for that thread would hang the sweep."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.kill()
+    for process in processes:
+        process.join(timeout=ABANDON_JOIN_S)
 
 
 def _start_method() -> multiprocessing.context.BaseContext:
