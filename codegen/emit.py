@@ -364,4 +364,10 @@ def generate_scene_header(gen: GeneratedModel, scene) -> str:
     return _tidy(_templates().get_template("scene.h.j2").render(ctx))
 
 
+def driver_files(gen: GeneratedModel, scene) -> dict[str, str]:
+    """File name -> text of a folder a C driver builds from: the model, its phase machine and
+    `<prefix>_scene.h` with the scene's numbers (what `impactgen generate` writes)."""
+    return {**gen.files(), f"{gen.prefix}_scene.h": generate_scene_header(gen, scene)}
+
+
 __all__ = ["GeneratedModel", "generate_model", "ccode", "ModelCPrinter"]

@@ -43,7 +43,7 @@ echo "sanitize: the phase machine in the pure-C driver, and the FMI glue driven 
 import sys
 from pathlib import Path
 import impactgen
-from impactgen.codegen.emit import generate_model, generate_scene_header
+from impactgen.codegen.emit import driver_files, generate_model
 from impactgen.engines import model_spec
 from impactgen.fmu.package import fmu_sources
 work = Path(sys.argv[1])
@@ -51,7 +51,7 @@ scene = impactgen.load_scene("paper")
 driver = work / "driver_model"
 driver.mkdir()
 gen = generate_model(model_spec(scene))
-for name, text in {**gen.files(), "model_scene.h": generate_scene_header(gen, scene)}.items():
+for name, text in driver_files(gen, scene).items():
     (driver / name).write_text(text)
 fmu = work / "fmu"
 fmu.mkdir()

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import sympy as sm
 
-from impactgen.codegen.emit import generate_scene_header, generate_model
+from impactgen.codegen.emit import driver_files, generate_model
 from impactgen.codegen.expressions import ModelSpec
 from impactgen.codegen.mechanics import derive_chain
 
@@ -134,8 +134,7 @@ def test_committed_generated_code_is_up_to_date(folder):
     scene = impactgen.load_scene(ROOT / "scenes" / "paper.toml") if folder != "chain3" else steel_chain_scene(3)
     gen = generate_model(model_spec(scene))
     where = ROOT / "generated" / folder
-    files = {**gen.files(), "model_scene.h": generate_scene_header(gen, scene)}
-    for name, text in files.items():
+    for name, text in driver_files(gen, scene).items():
         assert (where / name).read_text() == text, f"regenerate {where} (see generated/README.md)"
 
 

@@ -252,7 +252,7 @@ def _overrides(items: list[str]) -> dict:
 
 def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
     from .build import compile_model
-    from .codegen.emit import generate_model, generate_scene_header
+    from .codegen.emit import driver_files, generate_model
     from .engines import model_spec
     if not prefix.isidentifier() or not prefix.isascii():
         raise SceneError("--prefix", f"{prefix!r} is not a C identifier")
@@ -263,9 +263,8 @@ def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
     elapsed = time.perf_counter() - started
     try:
         out.mkdir(parents=True, exist_ok=True)
-        for name, text in gen.files().items():
+        for name, text in driver_files(gen, scene).items():
             (out / name).write_text(text)
-        (out / f"{prefix}_scene.h").write_text(generate_scene_header(gen, scene))
         if write_scene:
             (out / "scene.toml").write_text(scene.to_toml())
     except OSError as exc:

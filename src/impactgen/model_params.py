@@ -9,23 +9,17 @@ from __future__ import annotations
 from functools import lru_cache
 
 from .build import CompiledModel
-from .codegen.parameters import PARAMETERS, Field
+from .codegen.parameters import PARAMETERS
 from .errors import SceneError
 from .scene import Scene
 
 
 @lru_cache(maxsize=64)
-def input_fields(param_names: tuple[str, ...], links: int) -> tuple[Field, ...]:
-    """The fields of a model's struct that a scene sets, in struct order."""
-    by_name = {name: Field(name, key, p, link) for p in PARAMETERS if p.kind == "input"
-               for name, key, link in p.names(links)}
-    return tuple(by_name[name] for name in param_names if name in by_name)
-
-
-@lru_cache(maxsize=64)
 def _readers(param_names: tuple[str, ...], links: int) -> tuple[tuple[str, object, int], ...]:
-    """(field, reader, link) of each input: the loop of `fill_params`, made once per model."""
-    return tuple((f.name, f.row.read, f.link) for f in input_fields(param_names, links))
+    """(field, reader, link) of each field of a model's struct that a scene sets, in struct
+    order: the loop of `fill_params`, made once per model."""
+    inputs = {name: (p.read, link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
+    return tuple((name, *inputs[name]) for name in param_names if name in inputs)
 
 
 def fill_params(model: CompiledModel, scene: Scene):

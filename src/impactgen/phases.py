@@ -33,21 +33,20 @@ class Machine:
     """The C phase machine of one run, with the names the results use."""
 
     def __init__(self, model: CompiledModel, params):
-        self.model, self.params = model, params
-        self.lib, ffi = model.lib, model.ffi
-        self.state = ffi.new("model_machine *")
-        self.atol_now = ffi.new("double[]", model.nstate)
-        self.names = STATES  # the C enum follows codegen.machine.STATES
+        self.params, self.lib = params, model.lib
+        self.state = model.ffi.new("model_machine *")
+        self.atol_now = model.ffi.new("double[]", model.nstate)
         self.coulomb = model.spec.coulomb
 
     @property
     def phase(self) -> str:
-        return self.names[self.state.state]
+        return STATES[self.state.state]  # the C enum follows codegen.machine.STATES
 
     @property
     def slip_state(self) -> str:
         """The stick-slip label of a contact phase with exact Coulomb friction, else ""."""
-        return SLIP_LABEL[self.state.slip] if self.coulomb and self.state.state != 0 else ""
+        in_contact = self.state.state != self.lib.MODEL_MACHINE_FREE
+        return SLIP_LABEL[self.state.slip] if self.coulomb and in_contact else ""
 
     def atol(self, scene: Scene):
         self.lib.model_machine_atol(self.state, self.params, scene.solver.rtol, scene.solver.atol,

@@ -497,7 +497,7 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
 # Keys whose new value re-decides other fields (the links size every list; the method and
 # the jacobian setting resolve "auto" together): a case that changes one is read in full.
 _REREAD = {"chain.links", "solver.method", "solver.jacobian"}
-_MATERIALS = {"E": "E", "nu": "nu", "yield_strength": "yield_strength"}
+_MATERIALS = {"E", "nu", "yield_strength"}  # the keys of a [rod] or [surface] Material
 
 
 def scene_with(base: Scene, overrides: Mapping[str, Any]) -> Scene:

@@ -25,11 +25,11 @@ ROUNDS = 5  # C and Python alternated this many times; medians
 
 
 def _build(scene, folder: Path) -> Path:
-    from ..codegen.emit import generate_model, generate_scene_header
+    from ..codegen.emit import driver_files, generate_model
     from ..engines import model_spec
     from ..sundials import find_sundials
     gen = generate_model(model_spec(scene))
-    for name, text in {**gen.files(), "model_scene.h": generate_scene_header(gen, scene)}.items():
+    for name, text in driver_files(gen, scene).items():
         (folder / name).write_text(text)
     flags = find_sundials().cc_args()
     out = folder / "impact_driver"
@@ -56,8 +56,8 @@ def _python_ms(scene) -> float:
 
 
 def _instructions_per_step(driver: Path, folder: Path) -> dict:
-    """callgrind's instruction count of one run of the driver (minus its start-up, measured
-    with --repeat 0 and 1... here: a run of 1 and of 11, differenced), over CVODE's steps."""
+    """callgrind's instructions per run of the C loop (the driver with --repeat 1 and with
+    --repeat 11, differenced, so its start-up cancels), over CVODE's steps per run."""
     if not shutil.which("valgrind"):
         return {"error": "valgrind is not installed"}
     counts = {}

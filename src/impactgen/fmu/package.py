@@ -23,7 +23,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..build import GLUE_FILES, _native
-from ..codegen.emit import _c_double, _templates, _tidy, generate_model, generate_scene_header
+from ..codegen.emit import _c_double, _templates, _tidy, driver_files, generate_model
 from ..codegen.expressions import ModelSpec, assemble_model
 from ..engines import model_spec
 from ..errors import BuildError, SceneError
@@ -90,8 +90,7 @@ def fmu_sources(scene: Scene, kind: str = "both") -> FmuSources:
     env = _templates()
     context = {"prefix": gen.prefix, "PREFIX": gen.prefix.upper(), "guid": guid, "model_name": scene.name,
                "variables": variables_, "kinds": KINDS}
-    sources: dict[str, str] = dict(gen.files())
-    sources[f"{gen.prefix}_scene.h"] = generate_scene_header(gen, scene)
+    sources = driver_files(gen, scene)
     sources[f"{gen.prefix}_fmu.h"] = _tidy(env.get_template("fmu.h.j2").render(context))
     sources["fmi2_glue.c"] = _native("fmi2_glue.c")
     for name in FMI_HEADERS:

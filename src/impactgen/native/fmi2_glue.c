@@ -307,10 +307,8 @@ static double real_value(instance *c, const fmu_variable *v)
         if (v->kind == VAR_PARAM) return *model_param_slot(&c->p, v->index);
         if (v->kind == VAR_Q0) return c->q0[v->index];
         if (v->kind == VAR_U0) return c->u0[v->index];
-        instance probe = *c;  /* the state and outputs the start values give, computed aside */
-        const char *range = "";
-        if (prepare(&probe, &range) != MODEL_PARAMS_OK) return NAN;
-        *c = probe;
+        const char *range = "";  /* the state and outputs the start values give */
+        if (prepare(c, &range) != MODEL_PARAMS_OK) return NAN;
     }
     switch (v->kind) {
     case VAR_PARAM: return *model_param_slot(&c->p, v->index);
