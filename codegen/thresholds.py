@@ -31,7 +31,7 @@ THRESHOLDS = (
               "penetration (over the chain's length)"),
     Threshold("STICK_EXCESS", 1e-6,
               "a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event "
-              "(checked on the samples by the Python wrapper)"),
+              "(judged at the end of each segment from every step: the machine's observer)"),
     Threshold("ANGLE_ATOL_FLOOR", 1e-15,
               "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
 )

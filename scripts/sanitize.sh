@@ -23,14 +23,14 @@ from impactgen.codegen.emit import generate_model
 from impactgen.codegen.expressions import ModelSpec
 work = Path(sys.argv[1])
 gen = generate_model(ModelSpec(2))
-(work / "model.h").write_text(gen.header)
-(work / "model.c").write_text(gen.source)
+for name, text in gen.files().items():
+    (work / name).write_text(text)
 for name in GLUE_FILES:
     (work / name).write_text(_native(name))
 PY
 sundials=$("$PY" -c 'from impactgen.sundials import find_sundials as f; print(" ".join(f().cc_args()))')
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
-    -fno-sanitize-recover=undefined -I"$work" "$work/model.c" "$work/cvode_glue.c" \
+    -fno-sanitize-recover=undefined -I"$work" "$work/model.c" "$work/model_machine.c" "$work/cvode_glue.c" \
     "$work/small_kernels.c" tests/c/glue_driver.c $sundials -lm -o "$work/driver"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/driver"
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \

@@ -223,3 +223,32 @@ def test_free_flight_example_flies_before_it_hits():
     r = impactgen.simulate(impactgen.load_scene("chain3-free-flight"), rtol=1e-8, atol=1e-10)
     assert r.status == "ok" and r.phases[0].phase == "free" and r.summary["t_impact"] > 0.05
     assert abs(r.summary["energy"]["residual"]) < 1e-6 * r.summary["T0"]
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("paper", {}),
+    ("paper", BOUNCING),  # 2 s of bouncing: many impacts, more segments than one C call holds
+    ("coulomb", {"solver.t_end": 0.05}),  # stick and slip
+    ("bouncing", {}),  # chattering into sustained contact
+])
+def test_a_run_without_its_steps_has_the_same_summaries_and_impacts(name, overrides):
+    """record_steps=False keeps only the start, the switches and the end; the steps taken are
+    the same, so every summary, impact and span is equal to the digit."""
+    scene = impactgen.load_scene(name, overrides=overrides)
+    full = impactgen.simulate(scene)
+    lean = impactgen.simulate(scene, record_steps=False)
+    assert lean.status == full.status and lean.message == full.message
+    assert lean.summary == full.summary and lean.first_impact == full.first_impact
+    assert [i.to_dict() for i in lean.impacts] == [i.to_dict() for i in full.impacts]
+    assert [p.to_dict() for p in lean.phases] == [p.to_dict() for p in full.phases]
+    assert lean.stats["nsteps"] == full.stats["nsteps"]
+    assert len(lean.t) == len(full.phases) + 1 < len(full.t)
+    ends = np.searchsorted(full.t, lean.t)  # the switches are samples of the full run, with its states
+    np.testing.assert_array_equal(full.y[:, ends], lean.y)
+    np.testing.assert_array_equal(full.phase[ends], lean.phase)
+    np.testing.assert_array_equal(full.F[ends], lean.F)
+
+
+def test_record_steps_is_checked():
+    with pytest.raises(SceneError, match="record_steps"):
+        impactgen.simulate(impactgen.load_scene("paper"), record_steps="no")

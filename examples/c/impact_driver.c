@@ -1,8 +1,9 @@
 /*
  * impact_driver.c: run a generated impact model with SUNDIALS CVODE and its phase machine,
- * in plain C: no Python. The loop every embedder writes: start the machine, integrate until
- * a watched event (CVODE's root finder keeps the directions), ask the machine what the event
- * does, restart. The scene's numbers come from the generated <prefix>_scene.h.
+ * in plain C: no Python. The machine's loop (integrate until a watched event, CVODE's root
+ * finder keeping the directions; ask the machine what the event does; restart) is ig_run in
+ * the CVODE glue, the same loop impactgen's Python wrapper calls. The scene's numbers come
+ * from the generated <prefix>_scene.h.
  *
  * Build (from the repository root; see examples/c/Makefile and docs/embedding.md):
  *     make -C examples/c MODEL=../../generated/paper-double-pendulum
@@ -23,7 +24,8 @@
 
 /* the analytic Jacobian, when the model has one and the method is implicit */
 #define USE_JACOBIAN (MODEL_HAS_JACOBIAN && MODEL_SCENE_METHOD != IG_METHOD_ERK)
-#define CAPACITY 256  /* samples per call; the driver keeps only the last one */
+#define CAPACITY 64  /* segments (and their end samples) per call of ig_run */
+#define MAX_SEGMENTS 100000L  /* phase switches in one run: beyond this, stop rather than hang */
 
 typedef struct {
     double t_start, t_end, delta_max, P_max, delta_r, R_res, T_before, T_after;
@@ -45,10 +47,12 @@ typedef struct {
 } run_summary;
 
 /* One run of the scene from its start, on solver s (created, or reset, with the scene's
- * tolerances): the machine, segment by segment, as impactgen's Python wrapper runs it. */
+ * tolerances): the phase machine's loop in one call (ig_run), reading the first impact off
+ * the segment records, as impactgen's Python wrapper does. Only segment ends are sampled. */
 static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_summary *r)
 {
-    static double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE];
+    static double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE], out_buf[CAPACITY * MODEL_NOUT];
+    static ig_segment segments[CAPACITY];
     model_params p = *inputs;
     double atol[MODEL_NSTATE];
     model_machine m;
@@ -67,50 +71,39 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
         memcpy(r->y_start, r->y, sizeof r->y);
         r->impacts = 1;
     }
+    long begun = 0;
     for (;;) {
-        int events[MODEL_NEVENT], directions[MODEL_NEVENT], fired[MODEL_NEVENT];
-        const int watched = model_machine_events(&m, events, directions);
-        if (USE_JACOBIAN) ig_solver_use_jacobian(s, !model_machine_constrained(&m));
-        if (ig_segment_start(s, &p, r->t, r->y, MODEL_SCENE_T_END, events, directions, watched) < 0) {
-            r->status = "failed";
-            return;
-        }
-        int flag, n = 0;
-        do {
-            flag = ig_segment_advance(s, t_buf, y_buf, NULL, CAPACITY, &n, fired);
-            if (n > 0) {
-                r->t = t_buf[n - 1];
-                memcpy(r->y, y_buf + (size_t)(n - 1) * MODEL_NSTATE, sizeof r->y);
+        int n = 0, n_segments = 0;
+        const int flag = ig_run(s, &m, &p, &r->t, r->y, MODEL_SCENE_T_END, MODEL_SCENE_ATOL, MAX_SEGMENTS - begun,
+                                0, t_buf, y_buf, out_buf, NULL, CAPACITY, &n, segments, CAPACITY, &n_segments);
+        begun += n_segments;
+        for (int k = 0; k < n_segments; ++k) {
+            const ig_segment *seg = &segments[k];
+            const double *y = y_buf + (size_t)seg->sample * MODEL_NSTATE;
+            const double T = out_buf[(size_t)seg->sample * MODEL_NOUT + MODEL_OUT_T];
+            if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && ++r->impacts == 1) {
+                r->first.t_start = seg->t;
+                r->first.T_before = T;
+                memcpy(r->y_start, y, sizeof r->y_start);
             }
-        } while (flag == IG_BUFFER_FULL);
+            if ((seg->act & MODEL_ACT_MAX_COMPRESSION) && r->impacts == 1) {
+                r->first.delta_max = seg->delta_max;
+                r->first.P_max = seg->P_max;
+                r->first.delta_r = seg->delta_r;
+                r->first.R_res = seg->R_res;
+            }
+            if ((seg->act & MODEL_ACT_IMPACT_END) && r->impacts == 1) {
+                r->first.t_end = seg->t;
+                r->first.T_after = T;
+            }
+        }
+        if (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL) continue;
         if (flag < 0) {
             fprintf(stderr, "CVODE failed in %s at t = %g: %s\n", model_machine_state_name(m.state), r->t,
                     ig_solver_message(s));
             r->status = "failed";
-            return;
         }
-        if (flag != IG_ROOT) return;  /* the end time */
-        const int act = model_machine_switch(&m, &p, r->t, r->y, fired);
-        if ((act & MODEL_ACT_IMPACT_BEGIN) && ++r->impacts == 1) {
-            r->first.t_start = r->t;
-            r->first.T_before = output(&p, r->t, r->y, MODEL_OUT_T);
-            memcpy(r->y_start, r->y, sizeof r->y);
-        }
-        if ((act & MODEL_ACT_MAX_COMPRESSION) && r->impacts == 1) {
-            r->first.delta_max = m.delta_max;
-            r->first.P_max = m.P_max;
-            r->first.delta_r = m.delta_r;
-            r->first.R_res = m.R_res;
-        }
-        if ((act & MODEL_ACT_IMPACT_END) && r->impacts == 1) {
-            r->first.t_end = r->t;
-            r->first.T_after = output(&p, r->t, r->y, MODEL_OUT_T);
-        }
-        if (act & MODEL_ACT_END) return;
-        if (act & MODEL_ACT_TOLERANCES) {
-            model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
-            ig_solver_set_atol(s, atol);
-        }
+        return;
     }
 }
 

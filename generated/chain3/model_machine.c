@@ -389,6 +389,7 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     double out[MODEL_NOUT];
     memset(m, 0, sizeof *m);
     m->run_to_time = run_to_time;
+    m->stick_excess = -INFINITY;
     m->t_start = m->t_end = m->t_prev_start = m->t_prev_end = NAN;
     m->slip = 1.0;  /* free flight: no friction, whatever the state */
     m->R_res = p->R;
@@ -476,6 +477,8 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     int has[MODEL_NEVENT] = {0};
     const int watched = model_machine_events(m, events, directions);
     int contact_fired = 0, slip_fired = 0;
+    m->stick_excess = -INFINITY;  /* a new segment follows */
+    m->stick_F = 0.0;
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
@@ -515,6 +518,17 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     m->state = next;
     p->phase = law_of(next);
     return act;
+}
+
+void model_machine_observe(model_machine *m, const model_params *p, double t, const double *y)
+{
+    (void)m; (void)p; (void)t; (void)y;
+}
+
+int model_machine_stick_missed(const model_machine *m, const model_params *p)
+{
+    (void)m; (void)p;
+    return 0;
 }
 
 int model_machine_constrained(const model_machine *m)

@@ -41,7 +41,7 @@ extern "C" {
 #define MODEL_STOPPED_TOLERANCE 1e-09  /* a slipping tip whose v_Bx has fallen below this fraction of its speed has stopped */
 #define MODEL_CHATTER_RATIO 2.0  /* impacts chatter when a flight is shorter than this many contact times */
 #define MODEL_ANGLE_RESOLUTION 0.01  /* inside an impact the angles are resolved to this fraction of the expected penetration (over the chain's length) */
-#define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (checked on the samples by the Python wrapper) */
+#define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (judged at the end of each segment from every step: the machine's observer) */
 #define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
 
 /* Machine states: the contact phases of MODEL section 4, plus reloading (restitution's force
@@ -93,6 +93,8 @@ typedef struct {
     double t_prev_start, t_prev_end;  /* the impact before it */
     double scale[MODEL_NSTATE];  /* typical size of each state in this impact (nominals) */
     double side[MODEL_NEVENT];   /* last nonzero side of each event function (0: none yet) */
+    double stick_excess; /* exact Coulomb: the largest |F_f| - mu F of a stuck tip in this segment, N */
+    double stick_F;      /* and the largest F there, N */
 } model_machine;
 
 /* Parameters by index k < MODEL_NPARAM: the struct field, its scene key ("" when the
@@ -132,6 +134,13 @@ int model_machine_constrained(const model_machine *m);
  * impact to its own scales. */
 void model_machine_atol(const model_machine *m, const model_params *p, double rtol,
                         double atol, double *atol_out);
+/* After each accepted step within a segment: keeps what model_machine_stick_missed judges
+ * (a no-op unless a tip sticks under exact Coulomb friction). */
+void model_machine_observe(model_machine *m, const model_params *p, double t, const double *y);
+/* At the end of a segment, before model_machine_switch: 1 when the stuck tip needed a
+ * friction force beyond mu F (by more than MODEL_STICK_EXCESS of the largest F in the
+ * segment), so a slip event was missed and the run cannot be trusted; else 0. */
+int model_machine_stick_missed(const model_machine *m, const model_params *p);
 /* For integrators without directional root finding (FMI importers, fixed-step loops): after
  * each accepted step, model_machine_crossed flags in fired[k] the watched events whose
  * function crossed in their direction since the sides were stored (an exact 0 counts as

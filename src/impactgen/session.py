@@ -1,11 +1,14 @@
 """The CVODE integrator of a run, reused across runs of a warm process (stage 7, with phases.py).
 
-`CvodeSession` owns one `ig_solver` from the C glue (cvode_glue.c): it integrates one phase
-segment at a time, until an event, the end time or a failure, and hands back the samples
-(and, for dense output, each step's interpolating polynomial). `likely_cause` turns a CVODE
+`CvodeSession` owns one `ig_solver` from the C glue (cvode_glue.c) and runs the generated
+phase machine on it in C (ig_run), segment after segment, until the machine ends the run,
+the end time or a failure; it hands back the samples (every step, or only each segment's
+end), the segments' records and, for dense output, each step's interpolating polynomial. `likely_cause` turns a CVODE
 message into one that says what to try.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -13,7 +16,49 @@ from .build import CompiledModel
 from .errors import SolverError
 from .scene import METHODS, Scene
 
-FIRST_BUFFER = 1024  # samples; doubled while a segment keeps filling it
+FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
+SEGMENT_CAPACITY = 64  # segment records per C call of a run
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One phase segment of a run, as ig_run recorded it (see cvode_glue.h's ig_segment)."""
+
+    t: float  # its end
+    sample: int  # index of its last sample in the run's samples
+    state: int  # machine state during it
+    slip: float
+    event: int  # the model event that ended it, -1 at the end time
+    act: int  # MODEL_ACT_* bits of the switch at its end
+    next_state: int
+    next_slip: float
+    delta_max: float
+    P_max: float
+    delta_r: float
+    R_res: float
+    params: object  # a copy of the model_params it ran under (cffi)
+
+    @classmethod
+    def read(cls, seg, base: int, ffi) -> "Segment":
+        return cls(seg.t, base + seg.sample, seg.state, seg.slip, seg.event, seg.act, seg.next_state,
+                   seg.next_slip, seg.delta_max, seg.P_max, seg.delta_r, seg.R_res,
+                   ffi.new("model_params *", seg.params))
+
+
+@dataclass
+class MachineRun:
+    """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
+    ig_run's last return code with the message of a failure, and where the run stopped."""
+
+    t: np.ndarray
+    y: np.ndarray
+    outputs: np.ndarray
+    dense: np.ndarray | None
+    segments: list[Segment]
+    flag: int
+    message: str
+    t_last: float
+    y_last: np.ndarray
 
 
 class CvodeSession:
@@ -55,12 +100,11 @@ class CvodeSession:
         self.dense_terms = int(lib.ig_dense_terms(self.solver))
         self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
         self._alloc()
-        # per-segment arguments, allocated once
-        nev = max(len(model.event_names), 1)
-        self.event_idx = ffi.new("int[]", nev)
-        self.event_dirs = ffi.new("int[]", nev)
-        self.roots = ffi.new("int[]", nev)
+        # the run's arguments, allocated once
+        self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
+        self.n_segments = ffi.new("int *")
         self.n_out = ffi.new("int *")
+        self.t_now = ffi.new("double *")
         self.y0 = np.empty(model.nstate)
         self.y0_c = ffi.from_buffer("double[]", self.y0)
 
@@ -70,6 +114,8 @@ class CvodeSession:
         self.y_samples = np.empty((self.capacity, self.model.nstate))
         self.t_buf = ffi.from_buffer("double[]", self.t_samples)
         self.y_buf = ffi.from_buffer("double[]", self.y_samples)
+        self.out_samples = np.empty((self.capacity, len(self.model.output_names)))
+        self.out_buf = ffi.from_buffer("double[]", self.out_samples)
         self.d_samples = np.empty((self.capacity, self.dense_terms, self.model.nstate)) if self.dense else None
         self.d_buf = ffi.from_buffer("double[]", self.d_samples) if self.dense else ffi.NULL
 
@@ -79,52 +125,36 @@ class CvodeSession:
             self.dense = dense
             self._alloc()
 
-    def segment(self, params, phase: str, t0: float, y0: np.ndarray, t_stop: float,
-                n_events: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, bool]:
-        """Integrate from (t0, y0) until one of the first `n_events` events in `event_idx`
-        and `event_dirs` (filled by the phase machine) or t_stop. Returns the samples, their
-        step polynomials (None unless `keep_polynomials`) and whether an event fired, with
-        its flags in `roots`. A failure raises SolverError carrying the samples reached as
-        `partial`."""
-        lib = self.model.lib
+    def run(self, machine, params, t0: float, y0: np.ndarray, t_stop: float, atol: float,
+            max_segments: int, every_step: bool) -> "MachineRun":
+        """Run the phase machine (a started `model_machine *`) from (t0, y0) to t_stop in C
+        (ig_run), one call per buffer's worth: every step a sample when `every_step`, else
+        only each segment's end. The samples exclude (t0, y0)."""
+        ffi, lib = self.model.ffi, self.model.lib
         self.y0[:] = y0
-        flag = lib.ig_segment_start(self.solver, params, t0, self.y0_c, t_stop, self.event_idx,
-                                    self.event_dirs, n_events)
-        if flag < 0:
-            raise SolverError(self._message(), phase, t0)
-        ts, ys, ds = [], [], []
-        n_out, roots = self.n_out, self.roots
+        self.t_now[0] = t0
+        dense = self.dense and every_step
+        chunks: list[tuple[np.ndarray, ...]] = []
+        segments: list[Segment] = []
+        base = 0
         while True:
-            flag = lib.ig_segment_advance(self.solver, self.t_buf, self.y_buf, self.d_buf, self.capacity,
-                                          n_out, roots)
-            k = n_out[0]
-            ts.append(self.t_samples[:k].copy())
-            ys.append(self.y_samples[:k].copy())
-            if self.dense:
-                ds.append(self.d_samples[:k].copy())
-            if flag == lib.IG_BUFFER_FULL:
+            flag = lib.ig_run(self.solver, machine, params, self.t_now, self.y0_c, t_stop, atol,
+                              max_segments - len(segments), int(every_step), self.t_buf, self.y_buf,
+                              self.out_buf, self.d_buf if dense else ffi.NULL, self.capacity, self.n_out,
+                              self.segments, SEGMENT_CAPACITY, self.n_segments)
+            k = self.n_out[0]
+            chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
+                           self.d_samples[:k].copy() if dense else None))
+            segments.extend(Segment.read(self.segments[j], base, ffi) for j in range(self.n_segments[0]))
+            base += k
+            if flag == lib.IG_BUFFER_FULL and every_step:
                 self.capacity *= 2
                 self._alloc()
-                continue
-            if flag < 0:
-                t_fail = float(ts[-1][-1]) if k else (float(ts[-2][-1]) if len(ts) > 1 else t0)
-                error = SolverError(self._message(), phase, t_fail)
-                error.partial = (np.concatenate(ts), np.concatenate(ys), np.concatenate(ds) if ds else None)
-                raise error
-            break
-        fired = flag == lib.IG_ROOT
-        if len(ts) == 1:
-            return ts[0], ys[0], (ds[0] if ds else None), fired
-        return np.concatenate(ts), np.concatenate(ys), (np.concatenate(ds) if ds else None), fired
-
-    def use_jacobian(self, analytic: bool) -> None:
-        if self.model.lib.ig_solver_use_jacobian(self.solver, 1 if analytic else 0) != 0:
-            raise SolverError(self._message())
-
-    def set_atol(self, atol) -> None:
-        """New absolute tolerances (a cffi double array of the state's length)."""
-        if self.model.lib.ig_solver_set_atol(self.solver, atol) != 0:
-            raise SolverError(self._message())
+            if flag not in (lib.IG_BUFFER_FULL, lib.IG_SEGMENTS_FULL):
+                break
+        t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
+        message = self._message() if flag < 0 else ""
+        return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]), self.y0.copy())
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model

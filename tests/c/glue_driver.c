@@ -121,6 +121,52 @@ int main(void)
     ig_solver_free(s);
     ig_solver_free(NULL);
 
+    /* the phase machine's loop in one call (ig_run): summary only and every step, with
+     * buffers small enough that both resume many times, end in the same state */
+    double t_end_of[2], y_end_of[2][MODEL_NSTATE];
+    int segments_of[2] = {0, 0};
+    for (int every = 0; every <= 1; ++every) {
+        model_params q = paper_params();
+        q.surface_height = q.y_s;
+        model_machine m;
+        ig_segment segs[1];
+        double t = 0.0, y[MODEL_NSTATE];
+        int n_seg = 0;
+        initial_state(y);
+        model_machine_start(&m, &q, t, y, 0);
+        s = ig_solver_new(IG_METHOD_BDF, MODEL_HAS_JACOBIAN, 1e-8, atol, 100000, err, sizeof err);
+        EXPECT(s != NULL, "solver for ig_run created");
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg)
+               == IG_ERR_USAGE && ig_solver_message(s)[0], "ig_run without room for a sample refused");
+        do {
+            flag = ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, every ? 7 : 1, &n,
+                          segs, 1, &n_seg);
+            segments_of[every] += n_seg;
+            EXPECT(n_seg == 0 || segs[0].t == t_buf[segs[0].sample], "a segment's end is its last sample");
+        } while (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL);
+        EXPECT(flag == IG_RUN_DONE, "ig_run runs to separation");
+        t_end_of[every] = t;
+        memcpy(y_end_of[every], y, sizeof y);
+        ig_solver_free(s);
+    }
+    EXPECT(segments_of[0] == 3 && segments_of[1] == 3, "three phases: elastic, elasto-plastic, restitution");
+    EXPECT(t_end_of[0] == t_end_of[1] && memcmp(y_end_of[0], y_end_of[1], sizeof y_end_of[0]) == 0,
+           "summary-only and every-step runs take the same steps");
+    {
+        model_params q = paper_params();
+        q.surface_height = q.y_s;
+        model_machine m;
+        ig_segment segs[4];
+        double t = 0.0, y[MODEL_NSTATE];
+        int n_seg = 0;
+        initial_state(y);
+        model_machine_start(&m, &q, t, y, 0);
+        s = ig_solver_new(IG_METHOD_BDF, MODEL_HAS_JACOBIAN, 1e-8, atol, 100000, err, sizeof err);
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 1, 0, t_buf, y_buf, out, NULL, 7, &n, segs, 4, &n_seg)
+               == IG_ERR_SEGMENTS && n_seg == 1, "ig_run stops at max_segments");
+        ig_solver_free(s);
+    }
+
     printf("%s (%d failures)\n", failures ? "FAIL" : "ok", failures);
     return failures ? 1 : 0;
 }

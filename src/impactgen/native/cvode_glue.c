@@ -396,6 +396,54 @@ int ig_dense_terms(const ig_solver *s)
     return s->dense_terms;
 }
 
+#define IG_STEPPED 100  /* step_once: an ordinary step, the segment goes on */
+
+/* One step of the segment under way: IG_STEPPED, IG_ROOT (roots_found filled),
+ * IG_REACHED_END, or < 0 with the message set. The state is in s->y. */
+static int step_once(ig_solver *s, double *t_now, int *roots_found)
+{
+    if (s->segment_steps >= s->max_steps) {
+        s->active = 0;
+        snprintf(s->message, sizeof s->message,
+                 "more than %ld steps in one phase (solver.max_steps)", s->max_steps);
+        return IG_ERR_TOO_MUCH_WORK;
+    }
+    sunrealtype t;
+    const int flag = s->erk ? ERKStepEvolve(s->erk, s->t_stop, s->y, &t, ARK_ONE_STEP)
+                            : CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);
+    if (flag < 0) {
+        s->active = 0;
+        if (!s->message[0]) snprintf(s->message, sizeof s->message, "CVode returned %d", flag);
+        return IG_ERR_SOLVER;
+    }
+    s->segment_steps++;
+    *t_now = t;
+    if (flag == CV_ROOT_RETURN) {  /* ARK_ROOT_RETURN has the same value */
+        if (s->erk) ERKStepGetRootInfo(s->erk, roots_found);
+        else CVodeGetRootInfo(s->cvode, roots_found);
+        s->active = 0;
+        return IG_ROOT;
+    }
+    if (flag == CV_TSTOP_RETURN || t >= s->t_stop) {
+        s->active = 0;
+        return IG_REACHED_END;
+    }
+    return IG_STEPPED;
+}
+
+/* Write the step just taken as sample k (and its polynomial, if dense_buf). */
+static int write_sample(ig_solver *s, double t, int k, double *t_buf, double *y_buf, double *dense_buf)
+{
+    t_buf[k] = t;
+    memcpy(y_buf + (size_t)k * MODEL_NSTATE, N_VGetArrayPointer(s->y), sizeof(double) * MODEL_NSTATE);
+    if (dense_buf != NULL && write_dense(s, t, dense_buf + (size_t)k * s->dense_terms * MODEL_NSTATE) != 0) {
+        s->active = 0;
+        set_message(s, "CVodeGetDky could not give the interpolating polynomial of the step");
+        return IG_ERR_SOLVER;
+    }
+    return 0;
+}
+
 int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense_buf,
                        int capacity, int *n_written, int *roots_found)
 {
@@ -405,43 +453,100 @@ int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense
         return IG_ERR_USAGE;
     }
     while (*n_written < capacity) {
-        if (s->segment_steps >= s->max_steps) {
-            s->active = 0;
-            snprintf(s->message, sizeof s->message,
-                     "more than %ld steps in one phase (solver.max_steps)", s->max_steps);
-            return IG_ERR_TOO_MUCH_WORK;
-        }
-        sunrealtype t;
-        int flag = s->erk ? ERKStepEvolve(s->erk, s->t_stop, s->y, &t, ARK_ONE_STEP)
-                          : CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);
-        if (flag < 0) {
-            s->active = 0;
-            if (!s->message[0]) snprintf(s->message, sizeof s->message, "CVode returned %d", flag);
-            return IG_ERR_SOLVER;
-        }
-        s->segment_steps++;
-        t_buf[*n_written] = t;
-        memcpy(y_buf + (size_t)(*n_written) * MODEL_NSTATE, N_VGetArrayPointer(s->y),
-               sizeof(double) * MODEL_NSTATE);
-        if (dense_buf != NULL &&
-            write_dense(s, t, dense_buf + (size_t)(*n_written) * s->dense_terms * MODEL_NSTATE) != 0) {
-            s->active = 0;
-            set_message(s, "CVodeGetDky could not give the interpolating polynomial of the step");
-            return IG_ERR_SOLVER;
-        }
+        double t;
+        const int flag = step_once(s, &t, roots_found);
+        if (flag < 0) return flag;
+        if (write_sample(s, t, *n_written, t_buf, y_buf, dense_buf) != 0) return IG_ERR_SOLVER;
         (*n_written)++;
-        if (flag == CV_ROOT_RETURN) {  /* ARK_ROOT_RETURN has the same value */
-            if (s->erk) ERKStepGetRootInfo(s->erk, roots_found);
-            else CVodeGetRootInfo(s->cvode, roots_found);
-            s->active = 0;
-            return IG_ROOT;
-        }
-        if (flag == CV_TSTOP_RETURN || t >= s->t_stop) {
-            s->active = 0;
-            return IG_REACHED_END;
-        }
+        if (flag != IG_STEPPED) return flag;
     }
     return IG_BUFFER_FULL;
+}
+
+/* Begin the machine's next segment at (t, y): its events, its Jacobian, its tolerances. */
+static int begin_segment(ig_solver *s, const model_machine *m, const model_params *p, double t,
+                         const double *y, double t_stop)
+{
+    int events[MODEL_NEVENT], directions[MODEL_NEVENT];
+    const int watched = model_machine_events(m, events, directions);
+    if (s->jac && ig_solver_use_jacobian(s, !model_machine_constrained(m)) != 0) return IG_ERR_SOLVER;
+    return ig_segment_start(s, p, t, y, t_stop, events, directions, watched);
+}
+
+int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
+           double atol, long max_segments, int every_step,
+           double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
+           ig_segment *segments, int segment_capacity, int *n_segments)
+{
+    int roots_found[MODEL_NEVENT];
+    double atol_now[MODEL_NSTATE];
+    long begun = 0;
+    *n_written = 0;
+    *n_segments = 0;
+    if (capacity < 1 || segment_capacity < 1) {
+        set_message(s, "ig_run: the buffers must hold at least one sample and one segment");
+        return IG_ERR_USAGE;
+    }
+    for (;;) {
+        if (!s->active) {
+            if (*n_segments >= segment_capacity) return IG_SEGMENTS_FULL;
+            if (!every_step && *n_written >= capacity) return IG_BUFFER_FULL;
+            if (begun++ >= max_segments) {
+                set_message(s, "too many phase switches");
+                return IG_ERR_SEGMENTS;
+            }
+            const int flag = begin_segment(s, m, p, *t, y, t_stop);
+            if (flag < 0) return flag;
+        }
+        int flag;
+        do {
+            if (every_step && *n_written >= capacity) return IG_BUFFER_FULL;
+            flag = step_once(s, t, roots_found);
+            if (flag < 0) return flag;
+            memcpy(y, N_VGetArrayPointer(s->y), sizeof(double) * MODEL_NSTATE);
+            model_machine_observe(m, p, *t, y);
+            if (every_step || flag != IG_STEPPED) {
+                const int k = *n_written;
+                if (write_sample(s, *t, k, t_buf, y_buf, every_step ? dense_buf : NULL) != 0) return IG_ERR_SOLVER;
+                model_outputs(*t, y, out_buf + (size_t)k * MODEL_NOUT, p);
+                (*n_written)++;
+            }
+        } while (flag == IG_STEPPED);
+        if (model_machine_stick_missed(m, p)) {
+            set_message(s, "the stuck tip needed a friction force beyond mu F and no slip event "
+                           "fired; tighten solver.rtol");
+            return IG_ERR_STICK;
+        }
+        ig_segment *seg = &segments[(*n_segments)++];
+        seg->t = *t;
+        seg->sample = *n_written - 1;
+        seg->state = seg->next_state = m->state;
+        seg->slip = seg->next_slip = m->slip;
+        seg->params = *p;
+        seg->event = -1;
+        seg->act = 0;
+        seg->delta_max = m->delta_max;
+        seg->P_max = m->P_max;
+        seg->delta_r = m->delta_r;
+        seg->R_res = m->R_res;
+        if (flag == IG_REACHED_END) return IG_REACHED_END;
+        for (int k = 0; k < s->nevents && seg->event < 0; ++k) {
+            if (roots_found[k]) seg->event = s->events[k];
+        }
+        const int act = model_machine_switch(m, p, *t, y, roots_found);
+        seg->act = act;
+        seg->next_state = m->state;
+        seg->next_slip = m->slip;
+        seg->delta_max = m->delta_max;
+        seg->P_max = m->P_max;
+        seg->delta_r = m->delta_r;
+        seg->R_res = m->R_res;
+        if (act & MODEL_ACT_END) return IG_RUN_DONE;
+        if (act & MODEL_ACT_TOLERANCES) {
+            model_machine_atol(m, p, s->rtol, atol, atol_now);
+            if (ig_solver_set_atol(s, atol_now) != 0) return IG_ERR_USAGE;
+        }
+    }
 }
 
 void ig_solver_stats(const ig_solver *s, ig_stats *stats)

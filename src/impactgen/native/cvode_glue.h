@@ -2,14 +2,17 @@
  * cvode_glue.h: integrate one phase segment of a generated model with SUNDIALS CVODE.
  *
  * Written once for every model: it includes the generated "model.h" and calls model_rhs
- * and model_events. Python crosses into C once per segment: ig_segment_start sets up the
- * phase (its force law via params->phase, its active events and their directions), and
- * ig_segment_advance steps until a root, the stop time or a full sample buffer.
+ * and model_events. ig_segment_start sets up one phase segment (its force law via
+ * params->phase, its active events and their directions), and ig_segment_advance steps until
+ * a root, the stop time or a full sample buffer: the loop an embedder with its own phase
+ * logic writes. ig_run is the whole loop of the generated phase machine in one call, from
+ * segment to segment: what impactgen's Python wrapper and the C driver call.
  */
 #ifndef IMPACTGEN_CVODE_GLUE_H
 #define IMPACTGEN_CVODE_GLUE_H
 
 #include "model.h"
+#include "model_machine.h"
 
 /* cdef-begin: the declarations below are read by cffi as they stand. */
 /* Return codes of ig_segment_advance (>= 0: the segment may continue or is done). */
@@ -19,6 +22,10 @@
 #define IG_ERR_SOLVER -1     /* CVODE failed: ig_solver_message says why */
 #define IG_ERR_TOO_MUCH_WORK -2  /* more than max_steps steps in this segment */
 #define IG_ERR_USAGE -3      /* bad arguments (a bug in the caller) */
+#define IG_RUN_DONE 3        /* ig_run: the phase machine ended the run (separation) */
+#define IG_SEGMENTS_FULL 4   /* ig_run: the segment records are full: call again to continue */
+#define IG_ERR_STICK -4      /* ig_run: a stuck tip needed more than mu F: a slip event was missed */
+#define IG_ERR_SEGMENTS -5   /* ig_run: more segments than allowed (chattering impacts?) */
 /* Methods of ig_solver_new: CVODE's BDF and Adams, or ARKODE's explicit Runge-Kutta pair. */
 #define IG_METHOD_BDF 0
 #define IG_METHOD_ADAMS 1
@@ -94,6 +101,37 @@ const char *ig_solver_message(const ig_solver *s);
 /* Evaluate model_outputs for n samples (one Python crossing for a whole segment). */
 void ig_outputs(const model_params *params, int n, const double *t, const double *y,
                 double *out);
+
+/* One phase segment of ig_run: the machine state it ran in, how it ended, what the switch
+ * at its end did, and the parameters it ran under (the machine changes some at a switch). */
+typedef struct {
+    double t;            /* its end, s */
+    long sample;         /* index of its last sample in the buffers of the ig_run call */
+    int state;           /* MODEL_MACHINE_* during the segment */
+    double slip;         /* the stick-slip state during it (model_machine.slip) */
+    int event;           /* the model event that ended it (the first watched one fired); -1: t_stop */
+    int act;             /* MODEL_ACT_* bits of the switch at its end (0 at t_stop) */
+    int next_state;      /* the machine state after the switch */
+    double next_slip;
+    double delta_max, P_max, delta_r, R_res;  /* the machine's impact record after the switch */
+    model_params params; /* the parameters during the segment */
+} ig_segment;
+
+/* Run the phase machine m (started with model_machine_start) under p from (*t, y) to
+ * t_stop: each segment integrated until one of the events the machine watches, the switch
+ * there, the next segment, with the tolerances the machine asks for (atol: the scene's
+ * absolute tolerance; the relative one is the solver's) and the analytic Jacobian only
+ * where no constraint force acts. *t and y follow the run. Samples, with their outputs
+ * under the segment's parameters: every step when every_step is 1 (dense_buf, if not NULL,
+ * as ig_segment_advance), else only each segment's end (no dense output). Returns
+ * IG_RUN_DONE when the machine ends the run, IG_REACHED_END at t_stop, IG_BUFFER_FULL or
+ * IG_SEGMENTS_FULL when capacity samples or segment_capacity segments are written (call
+ * again with emptied buffers to continue), or < 0 on a failure (ig_solver_message says
+ * why; the samples up to it are written). At most max_segments segments begin in one call. */
+int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
+           double atol, long max_segments, int every_step,
+           double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
+           ig_segment *segments, int segment_capacity, int *n_segments);
 
 /* Read the SUNDIALS version the glue was compiled against. */
 int ig_sundials_version_major(void);
