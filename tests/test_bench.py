@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import shutil
 import subprocess
 import sys
 
@@ -94,7 +95,11 @@ def test_the_pure_c_loop_is_measured_beside_the_python_api(monkeypatch):
     from impactgen.bench import cloop
     monkeypatch.setattr(cloop, "C_REPEATS", 20)
     monkeypatch.setattr(cloop, "PY_BLOCK", 5)
+    monkeypatch.setattr(cloop, "PY_BLOCKS", 1)
+    monkeypatch.setattr(cloop, "PY_WARM", 2)
     monkeypatch.setattr(cloop, "ROUNDS", 1)
+    monkeypatch.setattr(cloop, "_instructions_by_phase", lambda driver, folder, segments: {})
+    monkeypatch.setattr(cloop, "_where_instructions_go", lambda driver, folder: {})
     monkeypatch.setattr(cloop, "_instructions_per_step", lambda driver, folder: {"instructions_per_step": 1.0,
                                                                                "steps": 1, "instructions_per_run": 1.0})
     result = cloop.c_loop("paper")
@@ -103,3 +108,23 @@ def test_the_pure_c_loop_is_measured_beside_the_python_api(monkeypatch):
     from impactgen.bench.report import targets
     rows = targets([], [], [], result)
     assert [r["verdict"] for r in rows if r["target"].startswith("speed 2")] == ["met" if result["ratio"] <= 1.5 else "missed"]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None,
+                    reason="valgrind's callgrind is not installed")
+def test_the_c_engines_instructions_are_counted_by_phase_and_by_part(tmp_path):
+    """Speed target 3's report: instructions per step in each contact phase of the paper's
+    impact, and the shares of the right-hand side, roots, linear algebra and CVODE."""
+    import impactgen
+    from impactgen.bench import cloop
+    scene = impactgen.load_scene("paper").replace({"solver.rtol": cloop.RTOL})
+    driver = cloop._build(scene, tmp_path)
+    segments = cloop._segment_steps(scene)
+    assert [phase for phase, _ in segments] == ["elastic", "elastoplastic", "restitution"]
+    by_phase = cloop._instructions_by_phase(driver, tmp_path, segments)["instructions_per_step_by_phase"]
+    assert set(by_phase) == {"elastic", "elastoplastic", "restitution"}
+    assert all(1e3 < n < 1e5 for n in by_phase.values())
+    shares = cloop._where_instructions_go(driver, tmp_path)["instruction_shares"]
+    assert all(0 <= v <= 1 for v in shares.values()) and sum(shares.values()) == pytest.approx(1.0)
+    assert shares["right-hand side"] > 0.01 and shares["integrator bookkeeping (CVODE)"] > 0.1

@@ -1,5 +1,6 @@
 """The pure-C loop (examples/c/impact_driver.c) against the Python API over the same impacts,
-and the C engine's instructions per step (valgrind's callgrind, when installed).
+and the C engine's instructions per step, by contact phase, and where they go (valgrind's
+callgrind, when installed).
 
 Speed targets of the speed issue need a floor to compare with: the same generated model,
 phase machine and CVODE glue, driven by a C loop with no Python. The driver is built from
@@ -13,14 +14,15 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[3]
 DRIVER = ROOT / "examples" / "c"
 RTOL = 1e-8  # the speed targets' tolerance
-C_REPEATS = 500  # warm runs per timing of the C loop
-PY_BLOCK = 50  # warm runs per timing of the Python API
+C_REPEATS = 2000  # warm runs per timing of the C loop
+PY_BLOCK = 200  # warm runs per block of the Python API
+PY_BLOCKS = 7  # blocks per timing of the Python API: their median, about as long as the C loop's
+PY_WARM = 50  # runs before each timing (the model loaded, the integrator pooled)
 ROUNDS = 5  # C and Python alternated this many times; medians
 
 
@@ -47,12 +49,31 @@ def _c_ms(driver: Path) -> float:
     return float(out.stdout.split("ms_per_run")[1].split()[0])
 
 
-def _python_ms(scene) -> float:
-    import impactgen
+_PYTHON_LOOP = """
+import sys, time
+import impactgen
+scene = impactgen.load_scene(sys.argv[1]).replace({"solver.rtol": float(sys.argv[2])})
+warm, block, count = (int(a) for a in sys.argv[3:6])
+for _ in range(warm):
+    impactgen.simulate(scene, record_steps=False).summary
+blocks = []
+for _ in range(count):
     started = time.perf_counter()
-    for _ in range(PY_BLOCK):
-        impactgen.simulate(scene).summary
-    return (time.perf_counter() - started) / PY_BLOCK * 1e3
+    for _ in range(block):
+        impactgen.simulate(scene, record_steps=False).summary
+    blocks.append((time.perf_counter() - started) / block * 1e3)
+print(sorted(blocks)[len(blocks) // 2])
+"""
+
+
+def _python_ms(scene_name: str) -> float:
+    """The Python API as a sweep calls it (summary only, without the steps), warm, in a
+    process of its own as the C loop runs in one: a process that has imported sympy to build
+    the driver pays for its objects in every garbage collection."""
+    out = subprocess.run([sys.executable, "-c", _PYTHON_LOOP, scene_name, str(RTOL), str(PY_WARM), str(PY_BLOCK),
+                          str(PY_BLOCKS)],
+                         capture_output=True, text=True, check=True)
+    return float(out.stdout.split()[-1])
 
 
 def _instructions_per_step(driver: Path, folder: Path) -> dict:
@@ -74,6 +95,76 @@ def _instructions_per_step(driver: Path, folder: Path) -> dict:
     return {"instructions_per_run": per_run, "steps": steps, "instructions_per_step": per_run / steps}
 
 
+def _callgrind(driver: Path, out: Path, repeat: int, *options: str) -> str:
+    res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *options, str(driver),
+                          "--repeat", str(repeat)], capture_output=True, text=True)
+    if res.returncode != 0:
+        raise RuntimeError(f"callgrind failed: {res.stderr.strip()[-200:]}")
+    return res.stdout
+
+
+def _segment_steps(scene) -> list[tuple[str, int]]:
+    """(phase, CVODE steps) of each segment of the scene's run: every step is a sample."""
+    import numpy as np
+
+    import impactgen
+    result = impactgen.simulate(scene)
+    return [(span.phase, int(np.searchsorted(result.t, span.t1, "right") - np.searchsorted(result.t, span.t0, "right")))
+            for span in result.phases]
+
+
+def _instructions_by_phase(driver: Path, folder: Path, segments: list[tuple[str, int]]) -> dict:
+    """Instructions per CVODE step in each contact phase: callgrind dumps its counts at every
+    entry into the machine's switch, so each dump holds one segment (with the switch before
+    it); the first run's dumps (the program's start-up) are left out."""
+    repeat = 10
+    _callgrind(driver, folder / "bysegment", repeat, "--dump-before=model_machine_switch")
+    dumps = sorted(folder.glob("bysegment.*"), key=lambda f: int(f.suffix[1:]))
+    counts = [int(next(line for line in f.read_text().splitlines() if line.startswith("summary:")).split()[1])
+              for f in dumps]
+    per_run = len(segments)
+    if len(counts) != per_run * (repeat + 1):
+        return {"error": f"expected {per_run * (repeat + 1)} callgrind dumps, found {len(counts)}"}
+    ir: dict[str, float] = {}
+    steps: dict[str, int] = {}
+    for k, count in enumerate(counts[per_run:]):
+        phase, n = segments[k % per_run]
+        ir[phase] = ir.get(phase, 0.0) + count
+        steps[phase] = steps.get(phase, 0) + n
+    return {"instructions_per_step_by_phase": {p: ir[p] / steps[p] for p in ir}}
+
+
+# Where the C engine's instructions go: the inclusive cost of these functions of the glue,
+# the small kernels and the generated model, against the whole of ig_run.
+COST_PARTS = {
+    "right-hand side": ("rhs",),
+    "event functions (roots)": ("roots",),
+    "Jacobian": ("jacobian",),
+    "linear algebra (dense LU)": ("dense_setup", "dense_solve"),
+    "phase machine and samples": ("model_machine_switch", "model_machine_observe", "model_machine_events",
+                                  "model_outputs"),
+}
+
+
+def _where_instructions_go(driver: Path, folder: Path) -> dict:
+    out = folder / "inclusive"
+    _callgrind(driver, out, 10)
+    res = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)],
+                         capture_output=True, text=True)
+    inclusive: dict[str, int] = {}
+    for line in res.stdout.splitlines():
+        parts = line.split()
+        if len(parts) >= 2 and parts[0].replace(",", "").isdigit() and ":" in line:
+            name = line.rsplit(":", 1)[1].split()[0]
+            inclusive.setdefault(name, int(parts[0].replace(",", "")))
+    total = inclusive.get("ig_run")
+    if not total:
+        return {"error": "callgrind_annotate did not list ig_run"}
+    shares = {part: sum(inclusive.get(f, 0) for f in names) / total for part, names in COST_PARTS.items()}
+    shares["integrator bookkeeping (CVODE)"] = 1.0 - sum(shares.values())
+    return {"instruction_shares": shares}
+
+
 def c_loop(scene_name: str = "paper") -> dict:
     """The C loop against the Python API (summary read), alternated; and instructions per step."""
     import impactgen
@@ -86,15 +177,20 @@ def c_loop(scene_name: str = "paper") -> dict:
             driver = _build(scene, folder)
         except (RuntimeError, OSError) as exc:
             return {"error": str(exc)}
-        _python_ms(scene)
         c, py = [], []
         for _ in range(ROUNDS):
             c.append(_c_ms(driver))
-            py.append(_python_ms(scene))
+            py.append(_python_ms(scene_name))
         result = {"scene": scene_name, "rtol": RTOL, "c_ms": statistics.median(c), "python_ms": statistics.median(py),
                   "c_runs_ms": c, "python_runs_ms": py}
         result["ratio"] = result["python_ms"] / result["c_ms"]
         result.update(_instructions_per_step(driver, folder))
+        if "instructions_per_step" in result:
+            try:
+                result.update(_instructions_by_phase(driver, folder, _segment_steps(scene)))
+                result.update(_where_instructions_go(driver, folder))
+            except (RuntimeError, OSError) as exc:
+                result["error"] = str(exc)
     return result
 
 

@@ -2,8 +2,8 @@
 
 - Overhead: a summary-only sweep of the paper's scene (omega20 varied) on a pool of two
   workers, against N times the engine's own time per impact over two cores, measured as
-  that: the same two workers each running `simulate` (and reading its summary) over their
-  half of the same cases, nothing else. The two are alternated three times; medians.
+  that: the same two workers each running `simulate` (without its steps, as a sweep runs it,
+  and reading its summary) over their half of the same cases, nothing else. The two are alternated three times; medians.
 - Scale: a Monte Carlo over seven uncertain inputs (MONTE_CARLO) on the local pool, and the
   same command on a Dask cluster made of a `dask scheduler` and two `dask worker` processes
   started separately on localhost. Each driver runs in its own process, which reports its
@@ -69,7 +69,7 @@ def _engine_only(raw: dict, values: list[float]) -> float:
     impactgen.simulate(scenes[0])
     started = time.perf_counter()
     for scene in scenes:
-        impactgen.simulate(scene).summary
+        impactgen.simulate(scene, record_steps=False).summary
     return time.perf_counter() - started
 
 

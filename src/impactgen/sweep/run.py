@@ -50,7 +50,7 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
                    wall_s=time.perf_counter() - started)
         return row
     try:
-        result = impactgen.simulate(scene)
+        result = impactgen.simulate(scene, record_steps=keep_trajectory)  # the summaries need no steps
     except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
         row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
         return row
