@@ -37,7 +37,7 @@ from .sundials import Sundials, find_sundials
 COMPILE_ARGS = ("-O2",)
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
-GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "small_kernels.c", "small_kernels.h")
+GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "dopri5.c", "dopri5.h", "small_kernels.c", "small_kernels.h")
 MANIFEST = "manifest.json"
 
 

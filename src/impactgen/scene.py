@@ -26,7 +26,9 @@ from .errors import SceneError
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 CONTACT_MODELS = ("three-phase", "hertz")
 FRICTION_MODES = ("regularized", "coulomb")
-METHODS = ("bdf", "adams", "erk")  # CVODE BDF, CVODE Adams, ARKODE explicit Runge-Kutta (the glue's IG_METHOD_*)
+# CVODE BDF, CVODE Adams, ARKODE's explicit Runge-Kutta pair, the same pair in plain C (the glue's IG_METHOD_*)
+METHODS = ("bdf", "adams", "erk", "dopri5")
+EXPLICIT_METHODS = ("erk", "dopri5")  # no Jacobian, no Newton iteration: for the non-stiff phases
 JACOBIANS = ("auto", "analytic", "difference")
 # "auto" emits the analytic Jacobian for BDF up to this many links. Above it, the Jacobian's
 # symbolic and compile cost (n = 10: +10 s, n = 20: +3 min) buys no measurable speed, since

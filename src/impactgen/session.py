@@ -14,7 +14,7 @@ import numpy as np
 
 from .build import CompiledModel
 from .errors import SolverError
-from .scene import METHODS, Scene
+from .scene import EXPLICIT_METHODS, METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
@@ -90,7 +90,7 @@ class CvodeSession:
         self.model = model
         ffi, lib = model.ffi, model.lib
         err = ffi.new("char[]", 512)
-        method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK
+        method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5
         analytic = 1 if uses_jacobian(model, scene) else 0
         solver = lib.ig_solver_new(method, analytic, scene.solver.rtol, atol, scene.solver.max_steps, err, 512)
         if solver == ffi.NULL:
@@ -179,7 +179,7 @@ class CvodeSession:
 def uses_jacobian(model: CompiledModel, scene: Scene) -> bool:
     """Whether CVODE gets the model's analytic Jacobian: the model has one and the method is
     implicit (the explicit Runge-Kutta pair uses none)."""
-    return bool(model.spec.jacobian) and scene.solver.method != "erk"
+    return bool(model.spec.jacobian) and scene.solver.method not in EXPLICIT_METHODS
 
 
 def likely_cause(message: str) -> str:

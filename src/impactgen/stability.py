@@ -78,6 +78,7 @@ SETTINGS = {
     "bdf, rtol 1e-11": {"solver.method": "bdf", "solver.rtol": 1e-11, "solver.atol": 1e-13},
     "adams, rtol 1e-8": {"solver.method": "adams", "solver.rtol": 1e-8, "solver.atol": 1e-10},
     "erk, rtol 1e-8": {"solver.method": "erk", "solver.rtol": 1e-8, "solver.atol": 1e-10},
+    "dopri5, rtol 1e-8": {"solver.method": "dopri5", "solver.rtol": 1e-8, "solver.atol": 1e-10},
 }
 SETTINGS = {name: {**s, "solver.max_steps": MAX_STEPS} for name, s in SETTINGS.items()}
 

@@ -125,6 +125,7 @@ int main(void)
      * buffers small enough that both resume many times, end in the same state */
     double t_end_of[2], y_end_of[2][MODEL_NSTATE];
     int segments_of[2] = {0, 0};
+    for (int method = IG_METHOD_BDF; method <= IG_METHOD_DOPRI5; method += IG_METHOD_DOPRI5 - IG_METHOD_BDF)
     for (int every = 0; every <= 1; ++every) {
         model_params q = paper_params();
         q.surface_height = q.y_s;
@@ -134,7 +135,8 @@ int main(void)
         int n_seg = 0;
         initial_state(y);
         model_machine_start(&m, &q, t, y, 0);
-        s = ig_solver_new(IG_METHOD_BDF, MODEL_HAS_JACOBIAN, 1e-8, atol, 100000, err, sizeof err);
+        const int analytic = method == IG_METHOD_BDF ? MODEL_HAS_JACOBIAN : 0;
+        s = ig_solver_new(method, analytic, 1e-8, atol, 100000, err, sizeof err);
         EXPECT(s != NULL, "solver for ig_run created");
         EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg)
                == IG_ERR_USAGE && ig_solver_message(s)[0], "ig_run without room for a sample refused");
@@ -148,10 +150,13 @@ int main(void)
         t_end_of[every] = t;
         memcpy(y_end_of[every], y, sizeof y);
         ig_solver_free(s);
+        if (every == 1) {
+            EXPECT(segments_of[0] == 3 && segments_of[1] == 3, "three phases: elastic, elasto-plastic, restitution");
+            EXPECT(t_end_of[0] == t_end_of[1] && memcmp(y_end_of[0], y_end_of[1], sizeof y_end_of[0]) == 0,
+                   "summary-only and every-step runs take the same steps");
+            segments_of[0] = segments_of[1] = 0;
+        }
     }
-    EXPECT(segments_of[0] == 3 && segments_of[1] == 3, "three phases: elastic, elasto-plastic, restitution");
-    EXPECT(t_end_of[0] == t_end_of[1] && memcmp(y_end_of[0], y_end_of[1], sizeof y_end_of[0]) == 0,
-           "summary-only and every-step runs take the same steps");
     {
         model_params q = paper_params();
         q.surface_height = q.y_s;

@@ -17,6 +17,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "cvode_glue.h"
+#include "dopri5.h"
 #include "small_kernels.h"
 
 #ifndef SUNDIALS_VERSION_MAJOR
@@ -30,6 +31,7 @@ struct ig_solver {
     SUNContext ctx;
     void *cvode;
     void *erk;        /* ARKODE ERKStep instead of CVODE (method IG_METHOD_ERK): explicit Runge-Kutta */
+    ig_dopri5 *rk;    /* the plain-C pair instead (method IG_METHOD_DOPRI5) */
     N_Vector y;
     N_Vector abstol;
     N_Vector dky;     /* one derivative of the interpolating polynomial (dense output) */
@@ -118,6 +120,13 @@ static void add_counters(const ig_solver *s, ig_stats *st)
 {
     long v;
     if (!s->initialised || s->counted) return;
+    if (s->rk) {
+        st->nsteps += s->rk->nsteps;
+        st->nfev += s->rk->nfev;
+        st->netfails += s->rk->netfails;
+        st->ngev += s->rk->ngev;
+        return;
+    }
     if (s->erk) {
         long nfe = 0;
         if (ERKStepGetNumSteps(s->erk, &v) == ARK_SUCCESS) st->nsteps += v;
@@ -140,6 +149,7 @@ void ig_solver_free(ig_solver *s)
     if (!s) return;
     if (s->cvode) CVodeFree(&s->cvode);
     if (s->erk) ERKStepFree(&s->erk);
+    free(s->rk);
     if (s->LS) SUNLinSolFree(s->LS);
     if (s->A) SUNMatDestroy(s->A);
     if (s->y) N_VDestroy(s->y);
@@ -159,8 +169,11 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         snprintf(err, (size_t)errlen, "out of memory");
         return NULL;
     }
-    if (method < IG_METHOD_BDF || method > IG_METHOD_ERK) failed = "method must be 0 (BDF), 1 (Adams) or 2 (ERK)";
-    else if (method == IG_METHOD_ERK && analytic_jacobian) failed = "an explicit method uses no Jacobian";
+    if (method < IG_METHOD_BDF || method > IG_METHOD_DOPRI5) {
+        failed = "method must be 0 (BDF), 1 (Adams), 2 (ERK) or 3 (DOPRI5)";
+    } else if ((method == IG_METHOD_ERK || method == IG_METHOD_DOPRI5) && analytic_jacobian) {
+        failed = "an explicit method uses no Jacobian";
+    }
     else if (!(rtol > 0.0) || max_steps <= 0) failed = "rtol and max_steps must be positive";
     else if (analytic_jacobian && !MODEL_HAS_JACOBIAN) failed = "this model was generated without its Jacobian";
 #if SUNDIALS_VERSION_MAJOR >= 7
@@ -181,7 +194,11 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         if (s->y) s->A = SUNDenseMatrix(MODEL_NSTATE, MODEL_NSTATE, s->ctx);
         if (s->A) s->LS = SUNLinSol_Dense(s->y, s->A, s->ctx);
         if (s->LS) ig_use_small_kernels(s->y, s->A, s->LS);
-        if (method == IG_METHOD_ERK) {
+        if (method == IG_METHOD_DOPRI5) {
+            s->rk = (ig_dopri5 *)calloc(1, sizeof *s->rk);
+            s->dense_terms = IG_DOPRI5_DENSE_TERMS;
+            if (!s->y || !s->abstol || !s->dky || !s->rk) failed = "allocating the explicit pair failed";
+        } else if (method == IG_METHOD_ERK) {
             if (s->y) N_VConst(0.0, s->y);
             if (s->y) s->erk = ERKStepCreate(rhs, 0.0, s->y, s->ctx);
             s->dense_terms = IG_ERK_DENSE_DEGREE + 1;
@@ -199,7 +216,9 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
             a[k] = atol[k];
         }
     }
-    if (!failed && s->erk) {
+    if (!failed && s->rk) {
+        /* nothing to set up: tolerances and events come with each segment */
+    } else if (!failed && s->erk) {
 #if SUNDIALS_VERSION_MAJOR < 7
         ERKStepSetErrHandlerFn(s->erk, on_error, s);
 #endif
@@ -277,7 +296,7 @@ int ig_solver_set_atol(ig_solver *s, const double *atol)
 
 int ig_solver_use_jacobian(ig_solver *s, int analytic)
 {
-    if (s->erk) return analytic ? IG_ERR_USAGE : 0;
+    if (s->erk || s->rk) return analytic ? IG_ERR_USAGE : 0;
     if (analytic == s->analytic_in_use) return 0;
     if (analytic && !s->jac) {
         set_message(s, "ig_solver_use_jacobian: the solver was created without the analytic Jacobian");
@@ -315,6 +334,16 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
     s->message[0] = '\0';
 
     memcpy(N_VGetArrayPointer(s->y), y0, sizeof(double) * MODEL_NSTATE);
+    if (s->rk) {
+        if (ig_dopri5_start(s->rk, params, t0, y0, t_stop, s->rtol, N_VGetArrayPointer(s->abstol), events,
+                            directions, nevents) != 0) {
+            set_message(s, "the right-hand side is not finite at the start of the phase");
+            return IG_ERR_SOLVER;
+        }
+        s->atol_changed = 0;
+        s->active = 1;
+        return 0;
+    }
     if (s->erk) {
         if (ERKStepReInit(s->erk, rhs, t0, s->y) != ARK_SUCCESS) return IG_ERR_SOLVER;
         if (s->atol_changed) {
@@ -353,12 +382,21 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
  * that order, so the expansion reproduces it exactly over the step [t_n - h_u, t_n]. */
 static int get_dky(ig_solver *s, double t, int k)
 {
+    if (s->rk) {  /* only the state itself (k = 0) is asked for; write_dense has its own path */
+        if (k != 0 || t < s->rk->t_old - 1e-12 * fabs(t) || t > s->rk->t + 1e-12 * fabs(t)) return -1;
+        ig_dopri5_interpolate(s->rk, t, N_VGetArrayPointer(s->dky));
+        return 0;
+    }
     if (s->erk) return ERKStepGetDky(s->erk, t, k, s->dky) == ARK_SUCCESS ? 0 : -1;
     return CVodeGetDky(s->cvode, t, k, s->dky) == CV_SUCCESS ? 0 : -1;
 }
 
 static int write_dense(ig_solver *s, double t, double *out)
 {
+    if (s->rk) {
+        ig_dopri5_taylor(s->rk, out);
+        return 0;
+    }
     int order = IG_ERK_DENSE_DEGREE;
     if (!s->erk && CVodeGetLastOrder(s->cvode, &order) != CV_SUCCESS) return -1;
     const double *dky = N_VGetArrayPointer(s->dky);
@@ -398,6 +436,32 @@ int ig_dense_terms(const ig_solver *s)
 
 #define IG_STEPPED 100  /* step_once: an ordinary step, the segment goes on */
 
+static int step_dopri5(ig_solver *s, double *t_now, int *roots_found)
+{
+    const int flag = ig_dopri5_step(s->rk, roots_found);
+    if (flag < 0) {
+        s->active = 0;
+        snprintf(s->message, sizeof s->message, flag == IG_DOPRI5_TOO_SMALL
+                 ? "DOPRI5: the step size fell below what double precision resolves at t = %.9g (too much "
+                   "accuracy asked, or a stiff phase)"
+                 : "DOPRI5: the right-hand side stopped being finite at t = %.9g on every smaller step tried",
+                 s->rk->t);
+        return IG_ERR_SOLVER;
+    }
+    s->segment_steps++;
+    *t_now = s->rk->t;
+    memcpy(N_VGetArrayPointer(s->y), s->rk->y, sizeof(double) * MODEL_NSTATE);
+    if (flag == IG_DOPRI5_ROOT) {
+        s->active = 0;
+        return IG_ROOT;
+    }
+    if (flag == IG_DOPRI5_STOP) {
+        s->active = 0;
+        return IG_REACHED_END;
+    }
+    return IG_STEPPED;
+}
+
 /* One step of the segment under way: IG_STEPPED, IG_ROOT (roots_found filled),
  * IG_REACHED_END, or < 0 with the message set. The state is in s->y. */
 static int step_once(ig_solver *s, double *t_now, int *roots_found)
@@ -408,6 +472,7 @@ static int step_once(ig_solver *s, double *t_now, int *roots_found)
                  "more than %ld steps in one phase (solver.max_steps)", s->max_steps);
         return IG_ERR_TOO_MUCH_WORK;
     }
+    if (s->rk) return step_dopri5(s, t_now, roots_found);
     sunrealtype t;
     const int flag = s->erk ? ERKStepEvolve(s->erk, s->t_stop, s->y, &t, ARK_ONE_STEP)
                             : CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);

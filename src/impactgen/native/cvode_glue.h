@@ -26,10 +26,12 @@
 #define IG_SEGMENTS_FULL 4   /* ig_run: the segment records are full: call again to continue */
 #define IG_ERR_STICK -4      /* ig_run: a stuck tip needed more than mu F: a slip event was missed */
 #define IG_ERR_SEGMENTS -5   /* ig_run: more segments than allowed (chattering impacts?) */
-/* Methods of ig_solver_new: CVODE's BDF and Adams, or ARKODE's explicit Runge-Kutta pair. */
+/* Methods of ig_solver_new: CVODE's BDF and Adams, ARKODE's explicit Runge-Kutta pair, or
+ * the same pair written out in C for a 6- to 60-state model (dopri5.c). */
 #define IG_METHOD_BDF 0
 #define IG_METHOD_ADAMS 1
 #define IG_METHOD_ERK 2
+#define IG_METHOD_DOPRI5 3  /* Dormand and Prince's 5(4) pair in plain C (dopri5.c), without SUNDIALS */
 /* CVODE's default maximum orders: dense output keeps max order + 1 coefficients a sample. */
 #define IG_BDF_MAX_ORDER 5
 #define IG_ADAMS_MAX_ORDER 12
@@ -46,9 +48,10 @@ typedef struct {
     long ngev;       /* root function calls */
 } ig_stats;
 
-/* method: IG_METHOD_BDF, IG_METHOD_ADAMS (CVODE) or IG_METHOD_ERK (ARKODE ERKStep, Dormand and
- * Prince's 5(4) pair, for non-stiff problems); analytic_jacobian: 1 to give CVODE model_jacobian (the
- * model must have one; not with ERK), 0 for CVODE's difference quotients. atol has MODEL_NSTATE entries.
+/* method: IG_METHOD_BDF, IG_METHOD_ADAMS (CVODE), IG_METHOD_ERK (ARKODE ERKStep, Dormand and
+ * Prince's 5(4) pair, for non-stiff problems) or IG_METHOD_DOPRI5 (the same pair in plain C);
+ * analytic_jacobian: 1 to give CVODE model_jacobian (the model must have one; not with the
+ * explicit methods), 0 for CVODE's difference quotients. atol has MODEL_NSTATE entries.
  * Returns NULL on failure with a message in err (errlen bytes). */
 ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const double *atol,
                          long max_steps, char *err, int errlen);

@@ -1,0 +1,332 @@
+/*
+ * dopri5.c: Dormand and Prince's 5(4) pair with dense output and root finding (dopri5.h).
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "dopri5.h"
+
+#define N MODEL_NSTATE
+#define SAFE 0.9          /* safety factor of the step-size controller */
+#define FAC_MIN 0.2       /* the step shrinks at most 5x ... */
+#define FAC_MAX 10.0      /* ... and grows at most 10x per step */
+#define BETA 0.04         /* the PI controller's weight of the previous error (Hairer's choice) */
+#define ERR_FLOOR 1e-4    /* the controller's memory never goes below this error */
+#define RHS_RETRIES 10    /* a failing right-hand side is retried on this many smaller steps */
+#define ROOT_TOLERANCE 100.0  /* a root is located to this many ulps of max(|t|, |h|) (as CVODE) */
+#define ROOT_ITERATIONS 200
+#define INSIDE_POINTS 4   /* points inside a step where not-yet-armed events are looked at */
+
+/* Dormand and Prince's tableau, its error weights and its dense-output weights. */
+static const double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
+static const double a21 = 1.0 / 5;
+static const double a31 = 3.0 / 40, a32 = 9.0 / 40;
+static const double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
+static const double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561, a54 = -212.0 / 729;
+static const double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176,
+                    a65 = -5103.0 / 18656;
+static const double a71 = 35.0 / 384, a73 = 500.0 / 1113, a74 = 125.0 / 192, a75 = -2187.0 / 6784,
+                    a76 = 11.0 / 84;
+static const double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200,
+                    e6 = 22.0 / 525, e7 = -1.0 / 40;
+static const double d1 = -12715105075.0 / 11282082432.0, d3 = 87487479700.0 / 32700410799.0,
+                    d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0,
+                    d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
+
+static int rhs(ig_dopri5 *r, double t, const double *y, double *f)
+{
+    r->nfev++;
+    if (model_rhs(t, y, f, r->params) != 0) return -1;
+    for (int i = 0; i < N; ++i) {
+        if (!isfinite(f[i])) return -1;
+    }
+    return 0;
+}
+
+static void watched(ig_dopri5 *r, double t, const double *y, double *g)
+{
+    double ev[MODEL_NEVENT];
+    r->ngev++;
+    model_events(t, y, ev, r->params);
+    for (int k = 0; k < r->nevents; ++k) g[k] = ev[r->events[k]];
+}
+
+static double sign_of(double v)
+{
+    return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
+}
+
+/* Hairer's starting step: from the sizes of y0, f(y0) and an estimate of the second derivative. */
+static double first_step(ig_dopri5 *r, double *scratch, double *f1)
+{
+    const double *y = r->y, *f0 = r->k[0];
+    double dnf = 0.0, dny = 0.0;
+    for (int i = 0; i < N; ++i) {
+        const double sk = r->atol[i] + r->rtol * fabs(y[i]);
+        dnf += (f0[i] / sk) * (f0[i] / sk);
+        dny += (y[i] / sk) * (y[i] / sk);
+    }
+    const double span = r->t_stop - r->t;
+    double h = (dnf <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf) * 0.01;
+    h = fmin(h, span);
+    for (int i = 0; i < N; ++i) scratch[i] = y[i] + h * f0[i];
+    if (rhs(r, r->t + h, scratch, f1) != 0) return fmin(h * 1e-3, span);
+    double der2 = 0.0;
+    for (int i = 0; i < N; ++i) {
+        const double sk = r->atol[i] + r->rtol * fabs(y[i]);
+        der2 += ((f1[i] - f0[i]) / sk) * ((f1[i] - f0[i]) / sk);
+    }
+    der2 = sqrt(der2) / h;
+    const double der12 = fmax(fabs(der2), sqrt(dnf));
+    const double h1 = der12 <= 1e-15 ? fmax(1e-6, h * 1e-3) : pow(0.01 / der12, 1.0 / 5.0);
+    return fmin(fmin(100.0 * h, h1), span);
+}
+
+int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const double *y0, double t_stop,
+                    double rtol, const double *atol, const int *events, const int *directions, int nevents)
+{
+    r->params = params;
+    r->rtol = rtol;
+    memcpy(r->atol, atol, sizeof r->atol);
+    r->t = r->t_old = t0;
+    r->t_stop = t_stop;
+    memcpy(r->y, y0, sizeof r->y);
+    r->fac_old = ERR_FLOOR;
+    r->rejected = 0;
+    r->nsteps = r->nfev = r->netfails = r->ngev = 0;
+    r->nevents = nevents;
+    for (int k = 0; k < nevents; ++k) {
+        r->events[k] = events[k];
+        r->directions[k] = directions[k];
+    }
+    if (rhs(r, t0, r->y, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
+    r->h = first_step(r, r->k[1], r->k[2]);
+    watched(r, t0, r->y, r->g);
+    int at_zero = 0;
+    for (int k = 0; k < nevents; ++k) {
+        r->side[k] = sign_of(r->g[k]);
+        at_zero |= r->side[k] == 0.0;
+    }
+    if (at_zero) {  /* an event function starting at 0: its side is where it goes (as CVODE decides) */
+        const double dt = fmin(fmax(ROOT_TOLERANCE * DBL_EPSILON * (fabs(t0) + r->h), 1e-3 * r->h), 0.5 * r->h);
+        double y_near[N], g_near[MODEL_NEVENT];
+        for (int i = 0; i < N; ++i) y_near[i] = r->y[i] + dt * r->k[0][i];
+        watched(r, t0 + dt, y_near, g_near);
+        for (int k = 0; k < nevents; ++k) {
+            if (r->side[k] == 0.0) r->side[k] = sign_of(g_near[k]);
+        }
+    }
+    /* the polynomial of a zero-length step: constant y (for an interpolation before any step) */
+    r->h_old = 0.0;
+    memcpy(r->cont[0], r->y, sizeof r->y);
+    memset(r->cont[1], 0, sizeof r->cont - sizeof r->cont[0]);
+    return 0;
+}
+
+/* The stages of a step of size h from (t, y); the new state in y1 and the error norm. */
+static int attempt(ig_dopri5 *r, double h, double *y1, double *err)
+{
+    double (*k)[N] = r->k, tmp[N];
+    const double t = r->t, *y = r->y;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * a21 * k[0][i];
+    if (rhs(r, t + c2 * h, tmp, k[1]) != 0) return -1;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * (a31 * k[0][i] + a32 * k[1][i]);
+    if (rhs(r, t + c3 * h, tmp, k[2]) != 0) return -1;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * (a41 * k[0][i] + a42 * k[1][i] + a43 * k[2][i]);
+    if (rhs(r, t + c4 * h, tmp, k[3]) != 0) return -1;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * (a51 * k[0][i] + a52 * k[1][i] + a53 * k[2][i] + a54 * k[3][i]);
+    if (rhs(r, t + c5 * h, tmp, k[4]) != 0) return -1;
+    for (int i = 0; i < N; ++i) {
+        tmp[i] = y[i] + h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]);
+    }
+    if (rhs(r, t + h, tmp, k[5]) != 0) return -1;
+    for (int i = 0; i < N; ++i) {
+        y1[i] = y[i] + h * (a71 * k[0][i] + a73 * k[2][i] + a74 * k[3][i] + a75 * k[4][i] + a76 * k[5][i]);
+    }
+    if (rhs(r, t + h, y1, k[6]) != 0) return -1;
+    double sum = 0.0;
+    for (int i = 0; i < N; ++i) {
+        const double e = h * (e1 * k[0][i] + e3 * k[2][i] + e4 * k[3][i] + e5 * k[4][i] + e6 * k[5][i] + e7 * k[6][i]);
+        const double sk = r->atol[i] + r->rtol * fmax(fabs(y[i]), fabs(y1[i]));
+        sum += (e / sk) * (e / sk);
+    }
+    *err = sqrt(sum / N);
+    return isfinite(*err) ? 0 : -1;
+}
+
+/* The continuous extension of the step just accepted (y still the old state). */
+static void keep_extension(ig_dopri5 *r, double h, const double *y1)
+{
+    const double (*k)[N] = (const double (*)[N])r->k;
+    for (int i = 0; i < N; ++i) {
+        const double ydiff = y1[i] - r->y[i];
+        const double bspl = h * k[0][i] - ydiff;
+        r->cont[0][i] = r->y[i];
+        r->cont[1][i] = ydiff;
+        r->cont[2][i] = bspl;
+        r->cont[3][i] = ydiff - h * k[6][i] - bspl;
+        r->cont[4][i] = h * (d1 * k[0][i] + d3 * k[2][i] + d4 * k[3][i] + d5 * k[4][i] + d6 * k[5][i] + d7 * k[6][i]);
+    }
+}
+
+void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
+{
+    const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
+    for (int i = 0; i < N; ++i) {
+        y[i] = r->cont[0][i] + s * (r->cont[1][i] + s1 * (r->cont[2][i] + s * (r->cont[3][i] + s1 * r->cont[4][i])));
+    }
+}
+
+void ig_dopri5_taylor(const ig_dopri5 *r, double *rows)
+{
+    /* the extension in powers of s = (t - t_old) / h_old, shifted to the s of r->t */
+    const double s0 = r->h_old != 0.0 ? (r->t - r->t_old) / r->h_old : 0.0;
+    static const double binomial[5][5] = {{1, 0, 0, 0, 0}, {1, 1, 0, 0, 0}, {1, 2, 1, 0, 0}, {1, 3, 3, 1, 0},
+                                          {1, 4, 6, 4, 1}};
+    for (int i = 0; i < N; ++i) {
+        const double *c0 = &r->cont[0][i], *c1 = &r->cont[1][i], *c2_ = &r->cont[2][i];
+        const double *c3_ = &r->cont[3][i], *c4_ = &r->cont[4][i];
+        const double a[5] = {*c0, *c1 + *c2_, -*c2_ + *c3_ + *c4_, -*c3_ - 2.0 * *c4_, *c4_};
+        double scale = 1.0;
+        for (int j = 0; j < IG_DOPRI5_DENSE_TERMS; ++j) {
+            double b = 0.0, power = 1.0;
+            for (int m = j; m < 5; ++m) {
+                b += a[m] * binomial[m][j] * power;
+                power *= s0;
+            }
+            rows[j * N + i] = r->h_old != 0.0 ? b / scale : (j == 0 ? b : 0.0);
+            scale *= r->h_old;
+        }
+    }
+}
+
+/* Watched event k crossed in its direction between the stored side and the value g
+ * (an exact 0 counts as crossed). */
+static int crossed(const ig_dopri5 *r, int k, double g)
+{
+    const double side = r->side[k];
+    if (side == 0.0 || sign_of(g) == side) return 0;
+    return r->directions[k] == 0 || r->directions[k] == -side;
+}
+
+/* The first time in [t_lo, t_hi] where event k reaches the crossed side (Illinois on the
+ * continuous extension of the last step): the right end of a bracket narrower than tol. */
+static double locate(ig_dopri5 *r, int k, double t_lo, double g_lo, double t_hi, double g_hi, double tol)
+{
+    double y[N], g[MODEL_NEVENT];
+    const double side = r->side[k];
+    int kept = 0;  /* which end stayed the last time (Illinois halves its value) */
+    for (int it = 0; it < ROOT_ITERATIONS && t_hi - t_lo > tol; ++it) {
+        double t_mid = t_hi - g_hi * (t_hi - t_lo) / (g_hi - g_lo);
+        if (!(t_mid > t_lo + tol / 2 && t_mid < t_hi - tol / 2)) t_mid = 0.5 * (t_lo + t_hi);
+        ig_dopri5_interpolate(r, t_mid, y);
+        watched(r, t_mid, y, g);
+        if (sign_of(g[k]) == side) {  /* still on the old side */
+            t_lo = t_mid;
+            g_lo = g[k];
+            if (kept == 1) g_hi *= 0.5;
+            kept = 1;
+        } else {
+            t_hi = t_mid;
+            g_hi = g[k];
+            if (kept == -1) g_lo *= 0.5;
+            kept = -1;
+        }
+    }
+    return t_hi;
+}
+
+/* Whether some watched event is not armed: on the side its watched crossing leads to (or at
+ * 0), so that it must first cross back. Such a return can fit inside one step (a short
+ * flight after a separation that leaves the tip in the dent): the step is then also looked
+ * at inside. */
+static int some_unarmed(const ig_dopri5 *r)
+{
+    for (int k = 0; k < r->nevents; ++k) {
+        if (r->side[k] == 0.0 || (r->directions[k] != 0 && r->side[k] == r->directions[k])) return 1;
+    }
+    return 0;
+}
+
+int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
+{
+    const double expo = 0.2 - BETA * 0.75;
+    double y1[N], err = 0.0;
+    int retries = 0;
+    for (;;) {
+        double h = r->h;
+        if (0.1 * fabs(h) <= fabs(r->t) * DBL_EPSILON || !(h > 0.0)) return IG_DOPRI5_TOO_SMALL;
+        const int last = r->t + 1.01 * h >= r->t_stop;
+        if (last) h = r->t_stop - r->t;
+        if (attempt(r, h, y1, &err) != 0) {  /* the right-hand side failed: a smaller step */
+            if (++retries > RHS_RETRIES) return IG_DOPRI5_RHS_FAILED;
+            r->netfails++;
+            r->h = 0.25 * h;
+            r->rejected = 1;
+            continue;
+        }
+        const double fac11 = pow(err, expo);
+        const double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, fac11 / pow(r->fac_old, BETA) / SAFE));
+        double h_new = h / fac;
+        if (err > 1.0) {  /* rejected: a smaller step */
+            r->netfails++;
+            r->h = h / fmin(1.0 / FAC_MIN, fac11 / SAFE);
+            r->rejected = 1;
+            continue;
+        }
+        r->fac_old = fmax(err, ERR_FLOOR);
+        keep_extension(r, h, y1);
+        r->t_old = r->t;
+        r->h_old = h;
+        r->t = last ? r->t_stop : r->t + h;
+        memcpy(r->y, y1, sizeof r->y);
+        memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
+        if (r->rejected) h_new = fmin(h_new, h);
+        r->rejected = 0;
+        r->h = h_new;
+        r->nsteps++;
+        break;
+    }
+    /* the watched events over the step: at its end, and inside it while some is not armed */
+    double g_end[MODEL_NEVENT], g_lo[MODEL_NEVENT], g_hi[MODEL_NEVENT], t_lo = r->t_old;
+    memcpy(g_lo, r->g, sizeof g_lo);
+    watched(r, r->t, r->y, g_end);
+    const int points = some_unarmed(r) ? INSIDE_POINTS : 0;
+    const double tol = ROOT_TOLERANCE * DBL_EPSILON * fmax(fabs(r->t), fabs(r->h_old));
+    for (int j = 1; j <= points + 1; ++j) {
+        const double t_hi = j > points ? r->t : r->t_old + r->h_old * j / (points + 1);
+        if (j > points) {
+            memcpy(g_hi, g_end, sizeof g_hi);
+        } else {
+            double y[N];
+            ig_dopri5_interpolate(r, t_hi, y);
+            watched(r, t_hi, y, g_hi);
+        }
+        int any = 0;
+        for (int k = 0; k < r->nevents; ++k) any |= crossed(r, k, g_hi[k]);
+        if (any) {  /* the first crossing: each crossed event located, the earliest kept with any as close */
+            double t_root[MODEL_NEVENT], first = t_hi;
+            for (int k = 0; k < r->nevents; ++k) {
+                t_root[k] = INFINITY;
+                if (!crossed(r, k, g_hi[k])) continue;
+                const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
+                t_root[k] = locate(r, k, t_lo, lo, t_hi, g_hi[k], tol);
+                first = fmin(first, t_root[k]);
+            }
+            for (int k = 0; k < r->nevents; ++k) roots_found[k] = t_root[k] <= first + tol;
+            if (first < r->t) {
+                r->t = first;
+                ig_dopri5_interpolate(r, first, r->y);
+            }
+            return IG_DOPRI5_ROOT;
+        }
+        for (int k = 0; k < r->nevents; ++k) {
+            if (g_hi[k] != 0.0) r->side[k] = sign_of(g_hi[k]);
+        }
+        memcpy(g_lo, g_hi, sizeof g_lo);
+        t_lo = t_hi;
+    }
+    memcpy(r->g, g_end, sizeof r->g);
+    return r->t >= r->t_stop ? IG_DOPRI5_STOP : IG_DOPRI5_STEPPED;
+}
