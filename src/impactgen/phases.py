@@ -75,7 +75,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)
     ran = session.run(m, params, 0.0, y, t_end, scene.solver.atol, MAX_SEGMENTS,
-                      every_step=record_steps or polynomials)
+                      every_step=record_steps or polynomials, with_params=t_eval is not None)
     spans, impacts = _spans_and_impacts(machine, model.event_names, ran.segments,
                                         start == lib.MODEL_START_CONTACT)
     status, message = _status(lib, scene, machine, ran, impacts)
@@ -86,7 +86,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     states = [state0, *(seg.state for seg in ran.segments), m.state]
     trajectory = Trajectory(
         t=np.concatenate([[0.0], ran.t]), y=np.concatenate([y[None, :], ran.y]),
-        phase=STATE_NAMES[np.repeat(states, [1, *np.diff(cuts)])],
+        phase=STATE_NAMES[np.repeat(states, [1, *(b - a for a, b in zip(cuts[:-1], cuts[1:]))])],
         outputs=dict(zip(model.output_names, np.concatenate([first_row, ran.outputs]).T)),
     )
     sampler = TimeSampler(t_eval) if t_eval is not None else None

@@ -36,13 +36,13 @@ class Segment:
     P_max: float
     delta_r: float
     R_res: float
-    params: object  # a copy of the model_params it ran under (cffi)
+    params: object  # a copy of the model_params it ran under (cffi), when asked for, else None
 
     @classmethod
-    def read(cls, seg, base: int, ffi) -> "Segment":
+    def read(cls, seg, base: int, ffi, with_params: bool) -> "Segment":
         return cls(seg.t, base + seg.sample, seg.state, seg.slip, seg.event, seg.act, seg.next_state,
                    seg.next_slip, seg.delta_max, seg.P_max, seg.delta_r, seg.R_res,
-                   ffi.new("model_params *", seg.params))
+                   ffi.new("model_params *", seg.params) if with_params else None)
 
 
 @dataclass
@@ -126,10 +126,11 @@ class CvodeSession:
             self._alloc()
 
     def run(self, machine, params, t0: float, y0: np.ndarray, t_stop: float, atol: float,
-            max_segments: int, every_step: bool) -> "MachineRun":
+            max_segments: int, every_step: bool, with_params: bool = False) -> "MachineRun":
         """Run the phase machine (a started `model_machine *`) from (t0, y0) to t_stop in C
         (ig_run), one call per buffer's worth: every step a sample when `every_step`, else
-        only each segment's end. The samples exclude (t0, y0)."""
+        only each segment's end. The samples exclude (t0, y0). `with_params` keeps a copy of
+        each segment's parameters (to evaluate outputs between its samples)."""
         ffi, lib = self.model.ffi, self.model.lib
         self.y0[:] = y0
         self.t_now[0] = t0
@@ -145,7 +146,7 @@ class CvodeSession:
             k = self.n_out[0]
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            segments.extend(Segment.read(self.segments[j], base, ffi) for j in range(self.n_segments[0]))
+            segments.extend(Segment.read(self.segments[j], base, ffi, with_params) for j in range(self.n_segments[0]))
             base += k
             if flag == lib.IG_BUFFER_FULL and every_step:
                 self.capacity *= 2
