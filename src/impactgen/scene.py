@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import re
 from collections import abc
@@ -351,6 +352,7 @@ def parse_override(text: str) -> tuple[str, Any]:
 INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 
+@functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys for every case
 def split_key(dotted: str) -> tuple[str, str, int | None]:
     """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
     raise SceneError for a key the schema does not have."""
