@@ -9,7 +9,7 @@ import pytest
 import impactgen
 
 
-@pytest.mark.parametrize("method", ["erk", "dopri5"])
+@pytest.mark.parametrize("method", ["erk", "dopri5", "auto"])
 @pytest.mark.parametrize("name", ["paper", "coulomb", "chain3-free-flight"])
 def test_the_explicit_pair_gives_the_same_impact(name, method):
     scene = impactgen.load_scene(name)
@@ -43,3 +43,21 @@ def test_the_plain_c_pair_finds_every_impact_of_a_chattering_run():
     assert len(rk.impacts) == len(bdf.impacts) > 100
     assert rk.summary["t_sustained"] == pytest.approx(bdf.summary["t_sustained"], abs=5e-3)
     assert np.all(rk.delta <= 1.01 * max(i.delta_max for i in rk.impacts))  # never through the surface
+
+
+@pytest.mark.parametrize("overrides", [
+    {"contact.friction": 2.0, "contact.friction_eps": 1e-10},  # the stuck tip's regularized friction
+    {"solver.t_end": 5.0},  # the resting tip of sustained contact
+])
+def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
+    """Where the explicit pair gives up (more than max_steps in one phase), "auto" finds the
+    steps held by stability, not accuracy, and lets BDF finish the segment."""
+    scene = impactgen.load_scene("paper", overrides={"solver.rtol": 1e-8, "solver.atol": 1e-10,
+                                                      "solver.max_steps": 100_000, **overrides})
+    rk, auto, bdf = (impactgen.simulate(scene, method=m) for m in ("dopri5", "auto", "bdf"))
+    assert not rk.success and "max_steps" in rk.message
+    assert auto.success, auto.message
+    assert auto.stats["nstiff"] >= 1 and auto.stats["nsteps"] < bdf.stats["nsteps"]
+    assert len(auto.impacts) == len(bdf.impacts)
+    assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-4)
+    assert abs(auto.summary["energy"]["residual"]) < 1e-4 * auto.summary["T0"]

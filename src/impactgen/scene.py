@@ -27,8 +27,9 @@ from .errors import SceneError
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 CONTACT_MODELS = ("three-phase", "hertz")
 FRICTION_MODES = ("regularized", "coulomb")
-# CVODE BDF, CVODE Adams, ARKODE's explicit Runge-Kutta pair, the same pair in plain C (the glue's IG_METHOD_*)
-METHODS = ("bdf", "adams", "erk", "dopri5")
+# CVODE BDF, CVODE Adams, ARKODE's explicit Runge-Kutta pair, the same pair in plain C, and that
+# pair handing a segment that turns stiff to BDF (the glue's IG_METHOD_*, in order)
+METHODS = ("bdf", "adams", "erk", "dopri5", "auto")
 EXPLICIT_METHODS = ("erk", "dopri5")  # no Jacobian, no Newton iteration: for the non-stiff phases
 JACOBIANS = ("auto", "analytic", "difference")
 # "auto" emits the analytic Jacobian for BDF up to this many links. Above it, the Jacobian's
@@ -230,7 +231,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "solver": {
         "method": Key("str", "bdf", choices=METHODS),
-        "jacobian": Key("str", "auto", choices=JACOBIANS, doc="auto: analytic with bdf up to 6 links"),
+        "jacobian": Key("str", "auto", choices=JACOBIANS, doc="auto: analytic with bdf (or auto) up to 6 links"),
         "rtol": Key("float", 1e-10, _tolerance),
         "atol": Key("float", 1e-12, _tolerance),
         "t_end": Key("t_end", "separation", doc='"separation" or a time in s'),
@@ -487,7 +488,7 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     method, jacobian_setting = get("solver", "method"), get("solver", "jacobian")
     jacobian = jacobian_setting
     if jacobian == "auto":
-        jacobian = "analytic" if method == "bdf" and n <= JACOBIAN_AUTO_MAX_LINKS else "difference"
+        jacobian = "analytic" if method in ("bdf", "auto") and n <= JACOBIAN_AUTO_MAX_LINKS else "difference"
     solver = Solver(method, jacobian, get("solver", "rtol"), get("solver", "atol"),
                     get("solver", "t_end"), get("solver", "t_max"), get("solver", "max_steps"),
                     get("solver", "sustained_contact"), jacobian_setting)

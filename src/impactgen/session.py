@@ -90,7 +90,7 @@ class CvodeSession:
         self.model = model
         ffi, lib = model.ffi, model.lib
         err = ffi.new("char[]", 512)
-        method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5
+        method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5, _AUTO
         analytic = 1 if uses_jacobian(model, scene) else 0
         solver = lib.ig_solver_new(method, analytic, scene.solver.rtol, atol, scene.solver.max_steps, err, 512)
         if solver == ffi.NULL:
@@ -170,7 +170,7 @@ class CvodeSession:
         st = self.model.ffi.new("ig_stats *")
         self.model.lib.ig_solver_stats(self.solver, st)
         return {k: int(getattr(st, k)) for k in ("nsteps", "nfev", "njev", "nlinsetups",
-                                                   "netfails", "nnlsfails", "ngev")}
+                                                   "netfails", "nnlsfails", "ngev", "nstiff")}
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")

@@ -79,6 +79,7 @@ SETTINGS = {
     "adams, rtol 1e-8": {"solver.method": "adams", "solver.rtol": 1e-8, "solver.atol": 1e-10},
     "erk, rtol 1e-8": {"solver.method": "erk", "solver.rtol": 1e-8, "solver.atol": 1e-10},
     "dopri5, rtol 1e-8": {"solver.method": "dopri5", "solver.rtol": 1e-8, "solver.atol": 1e-10},
+    "auto, rtol 1e-8": {"solver.method": "auto", "solver.rtol": 1e-8, "solver.atol": 1e-10},
 }
 SETTINGS = {name: {**s, "solver.max_steps": MAX_STEPS} for name, s in SETTINGS.items()}
 

@@ -31,7 +31,9 @@ struct ig_solver {
     SUNContext ctx;
     void *cvode;
     void *erk;        /* ARKODE ERKStep instead of CVODE (method IG_METHOD_ERK): explicit Runge-Kutta */
-    ig_dopri5 *rk;    /* the plain-C pair instead (method IG_METHOD_DOPRI5) */
+    ig_dopri5 *rk;    /* the plain-C pair instead (IG_METHOD_DOPRI5), or first (IG_METHOD_AUTO) */
+    int on_cvode;     /* CVODE integrates the segment under way (always for BDF and Adams) */
+    int dirs[MODEL_NEVENT];
     N_Vector y;
     N_Vector abstol;
     N_Vector dky;     /* one derivative of the interpolating polynomial (dense output) */
@@ -125,8 +127,8 @@ static void add_counters(const ig_solver *s, ig_stats *st)
         st->nfev += s->rk->nfev;
         st->netfails += s->rk->netfails;
         st->ngev += s->rk->ngev;
-        return;
     }
+    if (!s->on_cvode && !s->erk) return;  /* CVODE's counters belong to a segment already counted */
     if (s->erk) {
         long nfe = 0;
         if (ERKStepGetNumSteps(s->erk, &v) == ARK_SUCCESS) st->nsteps += v;
@@ -169,8 +171,8 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         snprintf(err, (size_t)errlen, "out of memory");
         return NULL;
     }
-    if (method < IG_METHOD_BDF || method > IG_METHOD_DOPRI5) {
-        failed = "method must be 0 (BDF), 1 (Adams), 2 (ERK) or 3 (DOPRI5)";
+    if (method < IG_METHOD_BDF || method > IG_METHOD_AUTO) {
+        failed = "method must be 0 (BDF), 1 (Adams), 2 (ERK), 3 (DOPRI5) or 4 (auto)";
     } else if ((method == IG_METHOD_ERK || method == IG_METHOD_DOPRI5) && analytic_jacobian) {
         failed = "an explicit method uses no Jacobian";
     }
@@ -194,8 +196,8 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         if (s->y) s->A = SUNDenseMatrix(MODEL_NSTATE, MODEL_NSTATE, s->ctx);
         if (s->A) s->LS = SUNLinSol_Dense(s->y, s->A, s->ctx);
         if (s->LS) ig_use_small_kernels(s->y, s->A, s->LS);
+        if (method == IG_METHOD_DOPRI5 || method == IG_METHOD_AUTO) s->rk = (ig_dopri5 *)calloc(1, sizeof *s->rk);
         if (method == IG_METHOD_DOPRI5) {
-            s->rk = (ig_dopri5 *)calloc(1, sizeof *s->rk);
             s->dense_terms = IG_DOPRI5_DENSE_TERMS;
             if (!s->y || !s->abstol || !s->dky || !s->rk) failed = "allocating the explicit pair failed";
         } else if (method == IG_METHOD_ERK) {
@@ -204,9 +206,12 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
             s->dense_terms = IG_ERK_DENSE_DEGREE + 1;
             if (!s->y || !s->abstol || !s->dky || !s->erk) failed = "allocating ARKODE failed";
         } else {
-            s->cvode = CVodeCreate(method == IG_METHOD_BDF ? CV_BDF : CV_ADAMS, s->ctx);
-            s->dense_terms = (method == IG_METHOD_BDF ? IG_BDF_MAX_ORDER : IG_ADAMS_MAX_ORDER) + 1;
+            s->cvode = CVodeCreate(method == IG_METHOD_ADAMS ? CV_ADAMS : CV_BDF, s->ctx);
+            s->dense_terms = (method == IG_METHOD_ADAMS ? IG_ADAMS_MAX_ORDER : IG_BDF_MAX_ORDER) + 1;
+            if (s->dense_terms < IG_DOPRI5_DENSE_TERMS) s->dense_terms = IG_DOPRI5_DENSE_TERMS;
             if (!s->y || !s->abstol || !s->dky || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
+            if (method == IG_METHOD_AUTO && !s->rk) failed = "allocating the explicit pair failed";
+            s->on_cvode = method != IG_METHOD_AUTO;
         }
     }
     if (!failed) {
@@ -216,7 +221,7 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
             a[k] = atol[k];
         }
     }
-    if (!failed && s->rk) {
+    if (!failed && s->rk && !s->cvode) {
         /* nothing to set up: tolerances and events come with each segment */
     } else if (!failed && s->erk) {
 #if SUNDIALS_VERSION_MAJOR < 7
@@ -296,7 +301,7 @@ int ig_solver_set_atol(ig_solver *s, const double *atol)
 
 int ig_solver_use_jacobian(ig_solver *s, int analytic)
 {
-    if (s->erk || s->rk) return analytic ? IG_ERR_USAGE : 0;
+    if (!s->cvode) return analytic ? IG_ERR_USAGE : 0;
     if (analytic == s->analytic_in_use) return 0;
     if (analytic && !s->jac) {
         set_message(s, "ig_solver_use_jacobian: the solver was created without the analytic Jacobian");
@@ -308,6 +313,21 @@ int ig_solver_use_jacobian(ig_solver *s, int analytic)
     if (CVodeSetJacFn(s->cvode, NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
 #endif
     s->analytic_in_use = analytic;
+    return 0;
+}
+
+/* CVODE from (t0, s->y) to the segment's end, with its events and their directions. */
+static int start_cvode(ig_solver *s, double t0)
+{
+    if (CVodeReInit(s->cvode, t0, s->y) != CV_SUCCESS) return IG_ERR_SOLVER;
+    if (s->atol_changed) {
+        if (CVodeSVtolerances(s->cvode, s->rtol, s->abstol) != CV_SUCCESS) return IG_ERR_SOLVER;
+        s->atol_changed = 0;
+    }
+    if (CVodeRootInit(s->cvode, s->nevents, s->nevents > 0 ? roots : NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
+    if (s->nevents > 0 && CVodeSetRootDirection(s->cvode, s->dirs) != CV_SUCCESS) return IG_ERR_SOLVER;
+    if (CVodeSetStopTime(s->cvode, s->t_stop) != CV_SUCCESS) return IG_ERR_SOLVER;
+    s->on_cvode = 1;
     return 0;
 }
 
@@ -328,7 +348,10 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
     s->counted = 0;
     s->params = params;
     s->nevents = nevents;
-    for (int k = 0; k < nevents; ++k) s->events[k] = events[k];
+    for (int k = 0; k < nevents; ++k) {
+        s->events[k] = events[k];
+        s->dirs[k] = directions[k];
+    }
     s->t_stop = t_stop;
     s->segment_steps = 0;
     s->message[0] = '\0';
@@ -340,7 +363,8 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
             set_message(s, "the right-hand side is not finite at the start of the phase");
             return IG_ERR_SOLVER;
         }
-        s->atol_changed = 0;
+        if (!s->cvode) s->atol_changed = 0;  /* auto: CVODE takes them if it takes over */
+        s->on_cvode = 0;
         s->active = 1;
         return 0;
     }
@@ -361,20 +385,9 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
         s->active = 1;
         return 0;
     }
-    if (CVodeReInit(s->cvode, t0, s->y) != CV_SUCCESS) return IG_ERR_SOLVER;
-    if (s->atol_changed) {
-        if (CVodeSVtolerances(s->cvode, s->rtol, s->abstol) != CV_SUCCESS) return IG_ERR_SOLVER;
-        s->atol_changed = 0;
-    }
-    if (CVodeRootInit(s->cvode, nevents, nevents > 0 ? roots : NULL) != CV_SUCCESS) return IG_ERR_SOLVER;
-    if (nevents > 0) {
-        int dirs[MODEL_NEVENT];
-        for (int k = 0; k < nevents; ++k) dirs[k] = directions[k];
-        if (CVodeSetRootDirection(s->cvode, dirs) != CV_SUCCESS) return IG_ERR_SOLVER;
-    }
-    if (CVodeSetStopTime(s->cvode, t_stop) != CV_SUCCESS) return IG_ERR_SOLVER;
-    s->active = 1;
-    return 0;
+    const int flag = start_cvode(s, t0);
+    if (flag == 0) s->active = 1;
+    return flag;
 }
 
 /* The Taylor coefficients y^(k)(t) / k!, k = 0 .. dense_terms - 1, of CVODE's interpolating
@@ -382,7 +395,7 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
  * that order, so the expansion reproduces it exactly over the step [t_n - h_u, t_n]. */
 static int get_dky(ig_solver *s, double t, int k)
 {
-    if (s->rk) {  /* only the state itself (k = 0) is asked for; write_dense has its own path */
+    if (s->rk && !s->on_cvode) {  /* only the state itself (k = 0) is asked for; write_dense has its own path */
         if (k != 0 || t < s->rk->t_old - 1e-12 * fabs(t) || t > s->rk->t + 1e-12 * fabs(t)) return -1;
         ig_dopri5_interpolate(s->rk, t, N_VGetArrayPointer(s->dky));
         return 0;
@@ -393,8 +406,10 @@ static int get_dky(ig_solver *s, double t, int k)
 
 static int write_dense(ig_solver *s, double t, double *out)
 {
-    if (s->rk) {
+    if (s->rk && !s->on_cvode) {
         ig_dopri5_taylor(s->rk, out);
+        memset(out + (size_t)IG_DOPRI5_DENSE_TERMS * MODEL_NSTATE, 0,
+               sizeof(double) * MODEL_NSTATE * (size_t)(s->dense_terms - IG_DOPRI5_DENSE_TERMS));
         return 0;
     }
     int order = IG_ERK_DENSE_DEGREE;
@@ -472,7 +487,17 @@ static int step_once(ig_solver *s, double *t_now, int *roots_found)
                  "more than %ld steps in one phase (solver.max_steps)", s->max_steps);
         return IG_ERR_TOO_MUCH_WORK;
     }
-    if (s->rk) return step_dopri5(s, t_now, roots_found);
+    if (s->rk && !s->on_cvode) {
+        const int flag = step_dopri5(s, t_now, roots_found);
+        if (flag == IG_STEPPED && s->cvode && s->rk->stiff) {  /* auto: BDF finishes the segment */
+            if (start_cvode(s, *t_now) != 0) {
+                s->active = 0;
+                return IG_ERR_SOLVER;
+            }
+            s->total.nstiff++;
+        }
+        return flag;
+    }
     sunrealtype t;
     const int flag = s->erk ? ERKStepEvolve(s->erk, s->t_stop, s->y, &t, ARK_ONE_STEP)
                             : CVode(s->cvode, s->t_stop, s->y, &t, CV_ONE_STEP);

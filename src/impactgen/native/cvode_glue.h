@@ -32,6 +32,8 @@
 #define IG_METHOD_ADAMS 1
 #define IG_METHOD_ERK 2
 #define IG_METHOD_DOPRI5 3  /* Dormand and Prince's 5(4) pair in plain C (dopri5.c), without SUNDIALS */
+#define IG_METHOD_AUTO 4    /* each segment begins with the plain-C pair, and goes on with CVODE's BDF
+                               from where the pair finds it stiff */
 /* CVODE's default maximum orders: dense output keeps max order + 1 coefficients a sample. */
 #define IG_BDF_MAX_ORDER 5
 #define IG_ADAMS_MAX_ORDER 12
@@ -46,10 +48,12 @@ typedef struct {
     long netfails;   /* error test failures */
     long nnlsfails;  /* nonlinear convergence failures */
     long ngev;       /* root function calls */
+    long nstiff;     /* method auto: segments the explicit pair found stiff and BDF finished */
 } ig_stats;
 
 /* method: IG_METHOD_BDF, IG_METHOD_ADAMS (CVODE), IG_METHOD_ERK (ARKODE ERKStep, Dormand and
- * Prince's 5(4) pair, for non-stiff problems) or IG_METHOD_DOPRI5 (the same pair in plain C);
+ * Prince's 5(4) pair, for non-stiff problems), IG_METHOD_DOPRI5 (the same pair in plain C) or
+ * IG_METHOD_AUTO (the plain-C pair, switching to BDF within a segment that turns stiff);
  * analytic_jacobian: 1 to give CVODE model_jacobian (the model must have one; not with the
  * explicit methods), 0 for CVODE's difference quotients. atol has MODEL_NSTATE entries.
  * Returns NULL on failure with a message in err (errlen bytes). */

@@ -95,6 +95,7 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
     r->fac_old = ERR_FLOOR;
     r->rejected = 0;
     r->nsteps = r->nfev = r->netfails = r->ngev = 0;
+    r->stiff_count = r->smooth_count = r->stiff = 0;
     r->nevents = nevents;
     for (int k = 0; k < nevents; ++k) {
         r->events[k] = events[k];
@@ -145,6 +146,12 @@ static int attempt(ig_dopri5 *r, double h, double *y1, double *err)
         y1[i] = y[i] + h * (a71 * k[0][i] + a73 * k[2][i] + a74 * k[3][i] + a75 * k[4][i] + a76 * k[5][i]);
     }
     if (rhs(r, t + h, y1, k[6]) != 0) return -1;
+    double num = 0.0, den = 0.0;  /* stiffness estimate: |f(y1) - f(y6)| / |y1 - y6| */
+    for (int i = 0; i < N; ++i) {
+        num += (k[6][i] - k[5][i]) * (k[6][i] - k[5][i]);
+        den += (y1[i] - tmp[i]) * (y1[i] - tmp[i]);
+    }
+    r->h_lambda = den > 0.0 ? h * sqrt(num / den) : 0.0;
     double sum = 0.0;
     for (int i = 0; i < N; ++i) {
         const double e = h * (e1 * k[0][i] + e3 * k[2][i] + e4 * k[3][i] + e5 * k[4][i] + e6 * k[5][i] + e7 * k[6][i]);
@@ -283,9 +290,16 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         memcpy(r->y, y1, sizeof r->y);
         memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
         if (r->rejected) h_new = fmin(h_new, h);
-        r->rejected = 0;
+        const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
         r->h = h_new;
         r->nsteps++;
+        r->rejected = 0;
+        if (unstable) {
+            r->smooth_count = 0;
+            if (++r->stiff_count >= IG_DOPRI5_STIFF_STEPS) r->stiff = 1;
+        } else if (++r->smooth_count >= IG_DOPRI5_SMOOTH_STEPS) {
+            r->stiff_count = 0;
+        }
         break;
     }
     /* the watched events over the step: at its end, and inside it while some is not armed */

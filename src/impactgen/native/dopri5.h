@@ -17,6 +17,9 @@
 
 #define IG_DOPRI5_STAGES 7
 #define IG_DOPRI5_DENSE_TERMS 5  /* Taylor coefficients of the continuous extension (degree 4) */
+#define IG_DOPRI5_STABILITY 3.25 /* h |lambda| beyond this: the step is limited by stability */
+#define IG_DOPRI5_STIFF_STEPS 15 /* ... (or after a rejection) for this many steps: stiff (Hairer) */
+#define IG_DOPRI5_SMOOTH_STEPS 6 /* ... within it this many in a row: the count starts again */
 
 enum {
     IG_DOPRI5_STEPPED = 0,    /* an accepted step; the segment goes on */
@@ -39,6 +42,9 @@ typedef struct {
     int nevents, events[MODEL_NEVENT], directions[MODEL_NEVENT];
     double g[MODEL_NEVENT];       /* watched event functions at t */
     double side[MODEL_NEVENT];    /* their last nonzero sign (0: none yet) */
+    double h_lambda;              /* h times the stiffness estimate of the last attempt (Hairer) */
+    int stiff_count, smooth_count;/* consecutive steps beyond and within the stability boundary */
+    int stiff;                    /* 1 once the steps are limited by stability, not accuracy */
     long nsteps, nfev, netfails, ngev;
 } ig_dopri5;
 
@@ -48,7 +54,11 @@ typedef struct {
 int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const double *y0, double t_stop,
                     double rtol, const double *atol, const int *events, const int *directions, int nevents);
 /* One accepted step (after any rejected ones): IG_DOPRI5_STEPPED, _ROOT (roots_found flags
- * the watched events that crossed; r->t, r->y are just past the root), _STOP, or < 0. */
+ * the watched events that crossed; r->t, r->y are just past the root), _STOP, or < 0.
+ * r->stiff turns 1 when IG_DOPRI5_STIFF_STEPS accepted steps had h |lambda| beyond the pair's
+ * stability boundary (Hairer's test, from the last two stages) or came after a rejected
+ * attempt, with never IG_DOPRI5_SMOOTH_STEPS ordinary steps in a row between them: the
+ * steps are held by stability, not accuracy, and an implicit method takes far fewer. */
 int ig_dopri5_step(ig_dopri5 *r, int *roots_found);
 /* y at t within the last step, from its continuous extension. */
 void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y);
