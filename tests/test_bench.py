@@ -63,6 +63,7 @@ def test_targets_are_judged_on_the_measured_figures():
     def run(name, rtol, err, ms):
         return wp.Run("paper", name, "f", rtol, "ok", wall_s=ms * 1e-3, err_u_final=err)
     runs = [run("CVODE BDF (impactgen C)", 1e-8, 1e-7, 1.0), run("CVODE BDF (impactgen C)", 1e-12, 5e-10, 3.0),
+            run("auto, DOPRI5 then BDF (impactgen C)", 1e-8, 1e-7, 1.0),  # the default: the targets' figures
             run("reference (Radau, numpy)", 1e-6, 1e-6, 100.0), run("reference (Radau, numpy)", 1e-8, 1e-8, 400.0),
             run("scipy DOP853 + C RHS", 1e-7, 1e-7, 8.0)]
     rhs = [{"links": 2, "c_free_ns": 50.0, "c_elastic_ns": 52.0, "c_elastoplastic_ns": 120.0, "c_restitution_ns": 51.0}]
@@ -127,4 +128,4 @@ def test_the_c_engines_instructions_are_counted_by_phase_and_by_part(tmp_path):
     assert all(1e3 < n < 1e5 for n in by_phase.values())
     shares = cloop._where_instructions_go(driver, tmp_path)["instruction_shares"]
     assert all(0 <= v <= 1 for v in shares.values()) and sum(shares.values()) == pytest.approx(1.0)
-    assert shares["right-hand side"] > 0.01 and shares["integrator bookkeeping (CVODE)"] > 0.1
+    assert shares["right-hand side"] > 0.01 and shares["the integrator's own work"] > 0.05

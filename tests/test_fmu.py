@@ -117,7 +117,10 @@ def test_half_a_second_of_bouncing_has_the_same_impacts(fmus, kind):
     result, log = run_fmu(fmus["paper"], kind, 0.5, interval=1e-3)
     assert result[-1]["impacts"] == len(run.impacts)
     starts = [t for t, a, b in log.events if a == "free"]
-    np.testing.assert_allclose(starts, [i.t_start for i in run.impacts[1:]], rtol=0, atol=1e-6)
+    # Model Exchange is integrated by FMPy's own CVODE: late in the chattering its contact
+    # times drift by about 2e-6 s (the run's are within 3e-9 s of a run at rtol 1e-13)
+    tolerance = 1e-6 if kind == "CoSimulation" else 5e-6
+    np.testing.assert_allclose(starts, [i.t_start for i in run.impacts[1:]], rtol=0, atol=tolerance)
 
 
 def test_a_non_physical_parameter_is_refused_by_name(fmus, tmp_path):

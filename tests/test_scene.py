@@ -27,7 +27,7 @@ def test_paper_scene_loads_with_its_values(paper_scene):
     assert s.q0 == pytest.approx((math.radians(-70), math.radians(-60)))
     assert s.u0 == (-0.1, -0.2)
     assert s.surface_height is None and s.solver.t_end is None
-    assert s.contact.friction == 0.2 and s.solver.method == "bdf"
+    assert s.contact.friction == 0.2 and s.solver.method == "auto"
 
 
 def test_overrides_replace_values():

@@ -229,7 +229,7 @@ def _wait_for_parts(out: Path, at_least: int, process: subprocess.Popen) -> None
         time.sleep(0.05)
 
 
-SLOW_CASES = ["--set", "solver.t_end=0.1", "--set", "solver.rtol=1e-8", "--vary",
+SLOW_CASES = ["--set", "solver.t_end=0.1", "--set", "solver.rtol=1e-8", "--set", "solver.method=bdf", "--vary",
               "initial.u[2]=linspace(-0.5,-0.1,160)", "--quiet"]
 
 

@@ -23,7 +23,7 @@
 #include "model_scene.h"
 
 /* the analytic Jacobian, when the model has one and the method is implicit */
-#define USE_JACOBIAN (MODEL_HAS_JACOBIAN && MODEL_SCENE_METHOD != IG_METHOD_ERK)
+#define USE_JACOBIAN (MODEL_HAS_JACOBIAN && IG_METHOD_USES_JACOBIAN(MODEL_SCENE_METHOD))
 #define CAPACITY 64  /* segments (and their end samples) per call of ig_run */
 #define MAX_SEGMENTS 100000L  /* phase switches in one run: beyond this, stop rather than hang */
 

@@ -56,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("scene", type=Path, help=SCENE_HELP)
     run.add_argument("--engine", choices=("c", "reference"), default="c",
                      help="c: generated C with CVODE (default); reference: the pure-Python engine")
-    run.add_argument("--method", default=None, help="integrator: bdf or adams (c engine); Radau, BDF, "
+    run.add_argument("--method", default=None, help="integrator: auto, bdf, adams, erk or dopri5 (c engine); Radau, BDF, "
                      "LSODA, DOP853 or RK45 (reference engine)")
     run.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)

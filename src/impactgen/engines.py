@@ -43,7 +43,9 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         "c": the generated C model under SUNDIALS CVODE (built on first use, then cached).
         "reference": the independent pure-Python engine on scipy's solve_ivp.
     method : str, optional
-        The integrator. C engine: "bdf" or "adams" (default: the scene's solver.method).
+        The integrator. C engine: "auto" (the scene default: the plain-C explicit pair,
+        handing a segment that turns stiff to BDF), "bdf", "adams", "erk" or "dopri5"
+        (default: the scene's solver.method).
         Reference engine: a solve_ivp method, "Radau" (default), "BDF", "LSODA", "DOP853"
         or "RK45".
     rtol, atol : float, optional

@@ -230,7 +230,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "u": Key("list", doc="rad/s"),
     },
     "solver": {
-        "method": Key("str", "bdf", choices=METHODS),
+        "method": Key("str", "auto", choices=METHODS),
         "jacobian": Key("str", "auto", choices=JACOBIANS, doc="auto: analytic with bdf (or auto) up to 6 links"),
         "rtol": Key("float", 1e-10, _tolerance),
         "atol": Key("float", 1e-12, _tolerance),

@@ -1,8 +1,9 @@
 """The solvers a work-precision benchmark compares, each as `run(scene, rtol) -> result`.
 
-- impactgen: CVODE BDF and Adams, ARKODE's explicit pair and the same pair in plain C
-  (dopri5), with the generated C, one C call per run (ig_run), the steps recorded; and BDF
-  and dopri5 summary only, as a sweep runs them;
+- impactgen: the default "auto" (the plain-C pair, BDF where a segment turns stiff), CVODE
+  BDF and Adams, ARKODE's explicit pair and the plain-C pair alone (dopri5), with the
+  generated C, one C call per run (ig_run), the steps recorded; and auto and BDF summary
+  only, as a sweep runs them;
 - scipy + C: solve_ivp (RK45, DOP853, Radau, LSODA) calling the generated C right-hand
   side through cffi, under the reference engine's phase loop;
 - reference: the pure-Python engine;
@@ -69,7 +70,8 @@ def cvode(method: str, record_steps: bool = True) -> Contender:
     def run(scene: Scene, rtol: float, budget: int) -> SimulationResult:
         return simulate(with_tolerance(scene, rtol, method=method, max_steps=budget), engine="c",
                         record_steps=record_steps)
-    name = {"erk": "ARKODE ERK 5(4)", "dopri5": "DOPRI5 plain C"}.get(method, f"CVODE {method.upper()}")
+    name = {"erk": "ARKODE ERK 5(4)", "dopri5": "DOPRI5 plain C", "auto": "auto, DOPRI5 then BDF"}.get(
+        method, f"CVODE {method.upper()}")
     return Contender(f"{name} (impactgen C{'' if record_steps else ', summary only'})", "impactgen", run)
 
 
@@ -191,8 +193,8 @@ def pydy_codegen(generator: str = "cython", method: str = "LSODA") -> Contender:
 
 def available_contenders() -> tuple[list[Contender], list[str]]:
     """Every contender whose packages import, and a note for each one left out."""
-    contenders = [cvode("bdf"), cvode("bdf", record_steps=False), cvode("adams"), cvode("erk"), cvode("dopri5"),
-                  cvode("dopri5", record_steps=False)]
+    contenders = [cvode("auto"), cvode("auto", record_steps=False), cvode("bdf"), cvode("bdf", record_steps=False),
+                  cvode("adams"), cvode("erk"), cvode("dopri5")]
     contenders += [scipy_with_c(m) for m in ("LSODA", "Radau", "DOP853", "RK45")]
     contenders += [pure_python("Radau"), pure_python("LSODA")]  # the reference engine's fastest, whichever
     notes = []

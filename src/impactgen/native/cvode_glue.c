@@ -173,7 +173,7 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
     }
     if (method < IG_METHOD_BDF || method > IG_METHOD_AUTO) {
         failed = "method must be 0 (BDF), 1 (Adams), 2 (ERK), 3 (DOPRI5) or 4 (auto)";
-    } else if ((method == IG_METHOD_ERK || method == IG_METHOD_DOPRI5) && analytic_jacobian) {
+    } else if (!IG_METHOD_USES_JACOBIAN(method) && analytic_jacobian) {
         failed = "an explicit method uses no Jacobian";
     }
     else if (!(rtol > 0.0) || max_steps <= 0) failed = "rtol and max_steps must be positive";

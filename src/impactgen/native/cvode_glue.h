@@ -144,4 +144,7 @@ int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y
 int ig_sundials_version_major(void);
 /* cdef-end */
 
+/* Whether a method uses a Jacobian (the explicit pairs do not; Python: scene.EXPLICIT_METHODS). */
+#define IG_METHOD_USES_JACOBIAN(method) ((method) != IG_METHOD_ERK && (method) != IG_METHOD_DOPRI5)
+
 #endif /* IMPACTGEN_CVODE_GLUE_H */

@@ -35,7 +35,7 @@
 
 enum mode { INSTANTIATED, INITIALIZATION, EVENT, CONTINUOUS, STEPPING, TERMINATED, FAILED };
 /* the analytic Jacobian, when the model has one and the method is implicit */
-#define USE_JACOBIAN (MODEL_HAS_JACOBIAN && MODEL_SCENE_METHOD != IG_METHOD_ERK)
+#define USE_JACOBIAN (MODEL_HAS_JACOBIAN && IG_METHOD_USES_JACOBIAN(MODEL_SCENE_METHOD))
 #define FAR_FUTURE 1e30  /* the end of a run with no stop time */
 #define STOP_SLACK 1e-9  /* a last step may pass the stop time by this much (relative): rounding of t + h */
 #define STEP_CAPACITY 1  /* CVODE steps per call of the glue: one, to stop past a communication point */
