@@ -92,16 +92,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
-        pieces = []
-        for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
-            if b == a:
-                continue
-            piece = StepPolynomials(ran.t[a:b], ran.dense[a:b])
-            pieces.append(piece)
-            if sampler is not None:
-                seg_params = ran.segments[j].params if j < len(ran.segments) else params
-                sampler.segment(float(ran.t[b - 1]), piece, _outputs_at(session, model, seg_params),
-                                STATES[states[j + 1]])
+        pieces = _step_pieces(session, model, ran, cuts, states, params, sampler)
         if dense_output:
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
     stats = session.stats()
@@ -149,6 +140,23 @@ def _status(lib, scene: Scene, machine: Machine, ran: MachineRun, impacts: list[
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
     return "failed", str(SolverError(message, STATES[machine.state.state], ran.t_last))
+
+
+def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, cuts: list[int],
+                 states: list[int], params, sampler: TimeSampler | None) -> list[StepPolynomials]:
+    """Each segment's step polynomials (a failed segment's last), and its samples at t_eval
+    read with the parameters it ran under."""
+    pieces = []
+    for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
+        if b == a:
+            continue
+        piece = StepPolynomials(ran.t[a:b], ran.dense[a:b])
+        pieces.append(piece)
+        if sampler is not None:
+            seg_params = ran.segments[j].params if j < len(ran.segments) else params
+            sampler.segment(float(ran.t[b - 1]), piece, _outputs_at(session, model, seg_params),
+                            STATES[states[j + 1]])
+    return pieces
 
 
 def _outputs_at(session: CvodeSession, model: CompiledModel, params):

@@ -48,7 +48,7 @@ class Segment:
 @dataclass
 class MachineRun:
     """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
-    ig_run's last return code with the message of a failure, and where the run stopped."""
+    ig_run's last return code with the message of a failure, and the time the run stopped."""
 
     t: np.ndarray
     y: np.ndarray
@@ -58,7 +58,6 @@ class MachineRun:
     flag: int
     message: str
     t_last: float
-    y_last: np.ndarray
 
 
 class CvodeSession:
@@ -155,7 +154,7 @@ class CvodeSession:
                 break
         t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
-        return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]), self.y0.copy())
+        return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]))
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model

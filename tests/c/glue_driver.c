@@ -40,6 +40,19 @@ static void initial_state(double *y)
     y[3] = -0.2;
 }
 
+/* A run of the paper's impact ready for ig_run: its parameters and machine started at t = 0,
+ * and a solver of `method` (with the analytic Jacobian where the method uses one). */
+static ig_solver *paper_run(int method, model_params *q, model_machine *m, double *y, const double *atol)
+{
+    char err[256];
+    *q = paper_params();
+    q->surface_height = q->y_s;
+    initial_state(y);
+    model_machine_start(m, q, 0.0, y, 0);
+    const int analytic = IG_METHOD_USES_JACOBIAN(method) ? MODEL_HAS_JACOBIAN : 0;
+    return ig_solver_new(method, analytic, 1e-8, atol, 100000, err, sizeof err);
+}
+
 int main(void)
 {
     char err[256];
@@ -128,17 +141,12 @@ int main(void)
     const int methods[3] = {IG_METHOD_BDF, IG_METHOD_DOPRI5, IG_METHOD_AUTO};
     for (int which = 0; which < 3; ++which)
     for (int every = 0; every <= 1; ++every) {
-        const int method = methods[which];
-        model_params q = paper_params();
-        q.surface_height = q.y_s;
+        model_params q;
         model_machine m;
         ig_segment segs[1];
         double t = 0.0, y[MODEL_NSTATE];
         int n_seg = 0;
-        initial_state(y);
-        model_machine_start(&m, &q, t, y, 0);
-        const int analytic = method == IG_METHOD_DOPRI5 ? 0 : MODEL_HAS_JACOBIAN;
-        s = ig_solver_new(method, analytic, 1e-8, atol, 100000, err, sizeof err);
+        s = paper_run(methods[which], &q, &m, y, atol);
         EXPECT(s != NULL, "solver for ig_run created");
         EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg)
                == IG_ERR_USAGE && ig_solver_message(s)[0], "ig_run without room for a sample refused");
@@ -160,15 +168,12 @@ int main(void)
         }
     }
     {
-        model_params q = paper_params();
-        q.surface_height = q.y_s;
+        model_params q;
         model_machine m;
         ig_segment segs[4];
         double t = 0.0, y[MODEL_NSTATE];
         int n_seg = 0;
-        initial_state(y);
-        model_machine_start(&m, &q, t, y, 0);
-        s = ig_solver_new(IG_METHOD_BDF, MODEL_HAS_JACOBIAN, 1e-8, atol, 100000, err, sizeof err);
+        s = paper_run(IG_METHOD_BDF, &q, &m, y, atol);
         EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 1, 0, t_buf, y_buf, out, NULL, 7, &n, segs, 4, &n_seg)
                == IG_ERR_SEGMENTS && n_seg == 1, "ig_run stops at max_segments");
         ig_solver_free(s);

@@ -82,15 +82,14 @@ def _instructions_per_step(driver: Path, folder: Path) -> dict:
     if not shutil.which("valgrind"):
         return {"error": "valgrind is not installed"}
     counts = {}
-    for repeat in (1, 11):
-        out = folder / f"callgrind.{repeat}"
-        res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(driver),
-                              "--repeat", str(repeat)], capture_output=True, text=True)
-        totals = [line for line in res.stderr.splitlines() if "Collected" in line]
-        if res.returncode != 0 or not totals:
-            return {"error": f"callgrind failed: {res.stderr.strip()[-200:]}"}
-        counts[repeat] = int(totals[-1].split(":")[-1].strip().replace(",", ""))
-        steps = int(res.stdout.split("steps")[1].split()[0])
+    try:
+        for repeat in (1, 11):
+            out = folder / f"callgrind.{repeat}"
+            stdout = _callgrind(driver, out, repeat)
+            counts[repeat] = _instructions(out)
+            steps = int(stdout.split("steps")[1].split()[0])
+    except RuntimeError as exc:
+        return {"error": str(exc)}
     per_run = (counts[11] - counts[1]) / 10
     return {"instructions_per_run": per_run, "steps": steps, "instructions_per_step": per_run / steps}
 
@@ -101,6 +100,11 @@ def _callgrind(driver: Path, out: Path, repeat: int, *options: str) -> str:
     if res.returncode != 0:
         raise RuntimeError(f"callgrind failed: {res.stderr.strip()[-200:]}")
     return res.stdout
+
+
+def _instructions(dump: Path) -> int:
+    """The instruction count of one callgrind dump (its summary line)."""
+    return int(next(line for line in dump.read_text().splitlines() if line.startswith("summary:")).split()[1])
 
 
 def _segment_steps(scene) -> list[tuple[str, int]]:
@@ -120,8 +124,7 @@ def _instructions_by_phase(driver: Path, folder: Path, segments: list[tuple[str,
     repeat = 10
     _callgrind(driver, folder / "bysegment", repeat, "--dump-before=model_machine_switch")
     dumps = sorted(folder.glob("bysegment.*"), key=lambda f: int(f.suffix[1:]))
-    counts = [int(next(line for line in f.read_text().splitlines() if line.startswith("summary:")).split()[1])
-              for f in dumps]
+    counts = [_instructions(f) for f in dumps]
     per_run = len(segments)
     if len(counts) != per_run * (repeat + 1):
         return {"error": f"expected {per_run * (repeat + 1)} callgrind dumps, found {len(counts)}"}

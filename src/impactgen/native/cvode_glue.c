@@ -208,7 +208,6 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         } else {
             s->cvode = CVodeCreate(method == IG_METHOD_ADAMS ? CV_ADAMS : CV_BDF, s->ctx);
             s->dense_terms = (method == IG_METHOD_ADAMS ? IG_ADAMS_MAX_ORDER : IG_BDF_MAX_ORDER) + 1;
-            if (s->dense_terms < IG_DOPRI5_DENSE_TERMS) s->dense_terms = IG_DOPRI5_DENSE_TERMS;
             if (!s->y || !s->abstol || !s->dky || !s->A || !s->LS || !s->cvode) failed = "allocating CVODE failed";
             if (method == IG_METHOD_AUTO && !s->rk) failed = "allocating the explicit pair failed";
             s->on_cvode = method != IG_METHOD_AUTO;
@@ -376,9 +375,7 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
         }
         if (ERKStepRootInit(s->erk, nevents, nevents > 0 ? roots : NULL) != ARK_SUCCESS) return IG_ERR_SOLVER;
         if (nevents > 0) {
-            int dirs[MODEL_NEVENT];
-            for (int k = 0; k < nevents; ++k) dirs[k] = directions[k];
-            if (ERKStepSetRootDirection(s->erk, dirs) != ARK_SUCCESS) return IG_ERR_SOLVER;
+            if (ERKStepSetRootDirection(s->erk, s->dirs) != ARK_SUCCESS) return IG_ERR_SOLVER;
             if (ERKStepSetNoInactiveRootWarn(s->erk) != ARK_SUCCESS) return IG_ERR_SOLVER;
         }
         if (ERKStepSetStopTime(s->erk, t_stop) != ARK_SUCCESS) return IG_ERR_SOLVER;
@@ -610,27 +607,25 @@ int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y
         ig_segment *seg = &segments[(*n_segments)++];
         seg->t = *t;
         seg->sample = *n_written - 1;
-        seg->state = seg->next_state = m->state;
-        seg->slip = seg->next_slip = m->slip;
+        seg->state = m->state;
+        seg->slip = m->slip;
         seg->params = *p;
         seg->event = -1;
         seg->act = 0;
-        seg->delta_max = m->delta_max;
-        seg->P_max = m->P_max;
-        seg->delta_r = m->delta_r;
-        seg->R_res = m->R_res;
-        if (flag == IG_REACHED_END) return IG_REACHED_END;
-        for (int k = 0; k < s->nevents && seg->event < 0; ++k) {
-            if (roots_found[k]) seg->event = s->events[k];
+        if (flag == IG_ROOT) {
+            for (int k = 0; k < s->nevents && seg->event < 0; ++k) {
+                if (roots_found[k]) seg->event = s->events[k];
+            }
+            seg->act = model_machine_switch(m, p, *t, y, roots_found);
         }
-        const int act = model_machine_switch(m, p, *t, y, roots_found);
-        seg->act = act;
-        seg->next_state = m->state;
+        seg->next_state = m->state;  /* the machine after the switch (as it was, at t_stop) */
         seg->next_slip = m->slip;
         seg->delta_max = m->delta_max;
         seg->P_max = m->P_max;
         seg->delta_r = m->delta_r;
         seg->R_res = m->R_res;
+        if (flag == IG_REACHED_END) return IG_REACHED_END;
+        const int act = seg->act;
         if (act & MODEL_ACT_END) return IG_RUN_DONE;
         if (act & MODEL_ACT_TOLERANCES) {
             model_machine_atol(m, p, s->rtol, atol, atol_now);

@@ -192,9 +192,9 @@ void ig_dopri5_taylor(const ig_dopri5 *r, double *rows)
     static const double binomial[5][5] = {{1, 0, 0, 0, 0}, {1, 1, 0, 0, 0}, {1, 2, 1, 0, 0}, {1, 3, 3, 1, 0},
                                           {1, 4, 6, 4, 1}};
     for (int i = 0; i < N; ++i) {
-        const double *c0 = &r->cont[0][i], *c1 = &r->cont[1][i], *c2_ = &r->cont[2][i];
-        const double *c3_ = &r->cont[3][i], *c4_ = &r->cont[4][i];
-        const double a[5] = {*c0, *c1 + *c2_, -*c2_ + *c3_ + *c4_, -*c3_ - 2.0 * *c4_, *c4_};
+        const double (*c)[N] = (const double (*)[N])r->cont;
+        const double a[5] = {c[0][i], c[1][i] + c[2][i], -c[2][i] + c[3][i] + c[4][i], -c[3][i] - 2.0 * c[4][i],
+                             c[4][i]};
         double scale = 1.0;
         for (int j = 0; j < IG_DOPRI5_DENSE_TERMS; ++j) {
             double b = 0.0, power = 1.0;
