@@ -5,10 +5,13 @@ option that will be refused), and the solver settings override the scene's own.
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
+from . import phases
+from .build import compile_model
 from .codegen.expressions import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
@@ -24,9 +27,16 @@ OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "recor
 
 def model_spec(scene: Scene) -> ModelSpec:
     """The structure of the generated C that `scene` needs (numbers stay parameters)."""
-    friction_law = scene.contact.friction_mode if scene.contact.friction > 0 else "none"
-    sustained = scene.solver.t_end is not None and scene.solver.sustained_contact
-    return ModelSpec(scene.n, scene.contact.model, friction_law, scene.solver.jacobian == "analytic", sustained)
+    contact, solver = scene.contact, scene.solver
+    friction_law = contact.friction_mode if contact.friction > 0 else "none"
+    sustained = solver.t_end is not None and solver.sustained_contact
+    return _spec(scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained)
+
+
+@lru_cache(maxsize=256)
+def _spec(*fields) -> ModelSpec:
+    """One ModelSpec per structure: a warm run looks its model up by it."""
+    return ModelSpec(*fields)
 
 
 def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,
@@ -96,19 +106,18 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
     if engine not in ENGINES:
         raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
-    given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
-    overrides = {SOLVER_OPTIONS[k]: v for k, v in given.items() if v is not None}
-    if method is not None and engine == "c":
-        overrides["solver.method"] = _c_method(method)
-    if overrides:
-        scene = scene.replace(overrides)
+    if rtol is not None or atol is not None or max_steps is not None or t_end is not None or method is not None:
+        given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
+        overrides = {SOLVER_OPTIONS[k]: v for k, v in given.items() if v is not None}
+        if method is not None and engine == "c":
+            overrides["solver.method"] = _c_method(method)
+        if overrides:
+            scene = scene.replace(overrides)
     times = _checked_times(t_eval, scene) if t_eval is not None else None
     for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
-        if not isinstance(flag, (bool, np.bool_)):
+        if flag is not True and flag is not False and not isinstance(flag, np.bool_):
             raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
-        from . import phases
-        from .build import compile_model
         return phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output),
                           record_steps=bool(record_steps))
     from . import reference

@@ -19,32 +19,24 @@ from .codegen.machine import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Impact, PhaseSpan, SimulationResult, Trajectory
+from .results import Columns, Impact, PhaseRuns, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
 from .session import CvodeSession, MachineRun, Segment
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
-STATE_NAMES = np.array(STATES)  # the phase label of each sample, by machine state
 
 
 class Machine:
-    """The C phase machine of one run, with the names the results use."""
+    """The C phase machine of one run (the session's buffer), with the names the results use."""
 
-    def __init__(self, model: CompiledModel, params):
-        self.params, self.lib = params, model.lib
-        self.state = model.ffi.new("model_machine *")
-        self.atol_now = model.ffi.new("double[]", model.nstate)
+    def __init__(self, model: CompiledModel, session: CvodeSession):
+        self.lib, self.state = model.lib, session.machine
         self.coulomb = model.spec.coulomb
 
     def slip_label(self, state: int, slip: float) -> str:
         """The stick-slip label of a contact state under exact Coulomb friction, else ""."""
         return SLIP_LABEL[slip] if self.coulomb and state != self.lib.MODEL_MACHINE_FREE else ""
-
-    def atol(self, scene: Scene):
-        self.lib.model_machine_atol(self.state, self.params, scene.solver.rtol, scene.solver.atol,
-                                    self.atol_now)
-        return self.atol_now
 
 
 def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
@@ -59,35 +51,37 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     started = time.perf_counter()
     lib = model.lib
     params = fill_params(model, scene)
-    machine = Machine(model, params)
+    session = CvodeSession.open(model, scene)
+    machine = Machine(model, session)
     m = machine.state
-    y = np.concatenate([scene.q0, scene.u0, np.zeros(model.nstate - 2 * scene.n)])
-    run_to_time = scene.solver.t_end is not None
-    start = lib.model_machine_start(m, params, 0.0, model.ffi.from_buffer("double[]", y), int(run_to_time))
+    n, solver = scene.n, scene.solver
+    y = session.y0
+    y[:n], y[n:2 * n], y[2 * n:] = scene.q0, scene.u0, 0.0
+    run_to_time = solver.t_end is not None
+    start = lib.model_machine_start(m, params, 0.0, session.y0_c, int(run_to_time))
     state0 = m.state
-    session = CvodeSession.open(model, scene, machine.atol(scene))
-    first_row = session.outputs(params, np.array([0.0]), y[None, :])
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         session.close(scene)
-        return _no_impact_at_start(scene, model, y, first_row[0].tolist(), start == lib.MODEL_START_ALONG,
+        first_row = session.outputs(params, np.array([0.0]), y[None, :])
+        return _no_impact_at_start(scene, model, y.copy(), first_row[0].tolist(), start == lib.MODEL_START_ALONG,
                                    started)
-    t_end = scene.solver.t_end if run_to_time else scene.solver.t_max
+    lib.model_machine_atol(m, params, solver.rtol, solver.atol, session.atol_now)
+    session.reset(scene)
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)
-    ran = session.run(m, params, 0.0, y, t_end, scene.solver.atol, MAX_SEGMENTS,
+    ran = session.run(params, 0.0, solver.t_end if run_to_time else solver.t_max, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
     spans, impacts = _spans_and_impacts(machine, model.event_names, ran.segments,
                                         start == lib.MODEL_START_CONTACT)
     status, message = _status(lib, scene, machine, ran, impacts)
 
-    # the samples: the start, then what the run wrote, segment by segment (rows cuts[j] to
-    # cuts[j + 1] of the run's; a failed segment's rows last), each labelled by its state
-    cuts = [0, *(seg.sample + 1 for seg in ran.segments), len(ran.t)]
+    # the samples: the start, then each segment's (after sample cuts[j] to sample
+    # cuts[j + 1]; a failed segment's rows last), each labelled by its state
+    cuts = [0, *(seg.sample for seg in ran.segments), len(ran.t) - 1]
     states = [state0, *(seg.state for seg in ran.segments), m.state]
     trajectory = Trajectory(
-        t=np.concatenate([[0.0], ran.t]), y=np.concatenate([y[None, :], ran.y]),
-        phase=STATE_NAMES[np.repeat(states, [1, *(b - a for a, b in zip(cuts[:-1], cuts[1:]))])],
-        outputs=dict(zip(model.output_names, np.concatenate([first_row, ran.outputs]).T)),
+        t=ran.t, y=ran.y, phase=PhaseRuns([STATES[s] for s in states], [1, *(b - a for a, b in zip(cuts, cuts[1:]))]),
+        outputs=Columns(session.output_index, ran.outputs),
     )
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
@@ -98,35 +92,37 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     stats = session.stats()
     if status != "failed":  # a failed integrator is not handed to the next run
         session.close(scene)
-    stats.update(segments=len(spans), samples=len(trajectory.t), wall_s=time.perf_counter() - started)
+    stats.update(segments=len(spans), samples=len(ran.t), wall_s=time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol)
 
 
 def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments: list[Segment],
                        contact_at_start: bool) -> tuple[list[PhaseSpan], list[Impact]]:
-    """The phase spans and the impacts, from the machine's record of each segment (sample
-    indices count the start as sample 0)."""
+    """The phase spans and the impacts, from the machine's record of each segment."""
     spans: list[PhaseSpan] = []
     impacts = [Impact(t_start=0.0, i_start=0)] if contact_at_start else []
+    lib, label = machine.lib, machine.slip_label
+    BEGIN, SLIP, MAX_COMPRESSION, END = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP,
+                                         lib.MODEL_ACT_MAX_COMPRESSION, lib.MODEL_ACT_IMPACT_END)
     t0 = 0.0
     for seg in segments:
-        phase, new_phase = STATES[seg.state], STATES[seg.next_state]
-        slip = machine.slip_label(seg.state, seg.slip)
-        spans.append(PhaseSpan(phase, t0, seg.t, event_names[seg.event] if seg.event >= 0 else "t_end", slip))
-        t0, act, i = seg.t, seg.act, seg.sample + 1
-        if act & machine.lib.MODEL_ACT_IMPACT_BEGIN:
-            impacts.append(Impact(t_start=seg.t, i_start=i))
+        phase, new_phase, t, act = STATES[seg.state], STATES[seg.next_state], seg.t, seg.act
+        slip = label(seg.state, seg.slip)
+        spans.append(PhaseSpan(phase, t0, t, event_names[seg.event] if seg.event >= 0 else "t_end", slip))
+        t0 = t
+        if act & BEGIN:
+            impacts.append(Impact(t_start=t, i_start=seg.sample))
         impact = impacts[-1] if impacts else None
-        if act & machine.lib.MODEL_ACT_SLIP:
-            impact.stick_slip.append((seg.t, slip, machine.slip_label(seg.next_state, seg.next_slip)))
-        if act & machine.lib.MODEL_ACT_MAX_COMPRESSION:
+        if act & SLIP:
+            impact.stick_slip.append((t, slip, label(seg.next_state, seg.next_slip)))
+        if act & MAX_COMPRESSION:
             impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = (
                 seg.delta_max, seg.P_max, seg.delta_r, seg.R_res)
         if impact is not None and phase != "free" and new_phase != phase:
-            impact.switches.append((seg.t, phase, new_phase))
-        if act & machine.lib.MODEL_ACT_IMPACT_END:
-            impact.t_end, impact.i_end = seg.t, i
+            impact.switches.append((t, phase, new_phase))
+        if act & END:
+            impact.t_end, impact.i_end = t, seg.sample
     return spans, impacts
 
 
@@ -150,11 +146,11 @@ def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, c
     for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
         if b == a:
             continue
-        piece = StepPolynomials(ran.t[a:b], ran.dense[a:b])
+        piece = StepPolynomials(ran.t[a + 1:b + 1], ran.dense[a + 1:b + 1])
         pieces.append(piece)
         if sampler is not None:
             seg_params = ran.segments[j].params if j < len(ran.segments) else params
-            sampler.segment(float(ran.t[b - 1]), piece, _outputs_at(session, model, seg_params),
+            sampler.segment(float(ran.t[b]), piece, _outputs_at(session, model, seg_params),
                             STATES[states[j + 1]])
     return pieces
 

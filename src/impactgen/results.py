@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -87,8 +87,60 @@ class Trajectory:
 
     t: np.ndarray  # (N,)
     y: np.ndarray  # (N, nstate): q, u, then the works W_normal[, W_friction]; rows are samples
-    phase: np.ndarray  # (N,) phase name of the step that ended at each sample
-    outputs: dict[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
+    phase: "np.ndarray | PhaseRuns"  # (N,) phase name of the step that ended at each sample
+    outputs: Mapping[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
+
+    def phase_labels(self) -> np.ndarray:
+        """`phase` as an array (runs are expanded once, on first use)."""
+        if isinstance(self.phase, PhaseRuns):
+            self.phase = self.phase.expand()
+        return self.phase
+
+
+@dataclass
+class PhaseRuns:
+    """Phase labels as runs, labels[j] for counts[j] samples: what a run knows without
+    building an array of names per sample, which few callers ask for."""
+
+    labels: list[str]
+    counts: list[int]
+
+    def expand(self) -> np.ndarray:
+        return np.repeat(np.array(self.labels), self.counts)
+
+
+class Columns(Mapping):
+    """Named columns of a table of samples (rows are samples), read as views when asked
+    for: a run's outputs without one array object per output made up front."""
+
+    def __init__(self, index: Mapping[str, int], table: np.ndarray):
+        self._index, self._table = index, table
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self._table[:, self._index[name]]
+
+    def __iter__(self):
+        return iter(self._index)
+
+    def __len__(self) -> int:
+        return len(self._index)
+
+
+class computed_once:
+    """functools.cached_property without the lock it takes on every first use before
+    Python 3.12: a summary is read once per run, in the inner loop of a sweep."""
+
+    def __init__(self, func):
+        self.func, self.__doc__ = func, func.__doc__
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj, objtype=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.func(obj)  # found there from now on
+        return value
 
 
 def _output(name: str, doc: str) -> property:
@@ -157,12 +209,12 @@ class SimulationResult:
     def __post_init__(self) -> None:
         _fill_impact_energies(self.trajectory, self.n, self.impacts)
 
-    @cached_property
+    @computed_once
     def first_impact(self) -> dict[str, Any]:
         """The first impact (MODEL section 6), computed on first use and kept."""
         return _first_impact_summary(self)
 
-    @cached_property
+    @computed_once
     def summary(self) -> dict[str, Any]:
         """The run (for a run to separation, its first impact), computed on first use and kept."""
         return self.first_impact if self._to_separation() else _run_summary(self)
@@ -207,7 +259,7 @@ class SimulationResult:
 
     @property
     def phase(self) -> np.ndarray:
-        return self._shown.phase
+        return self._shown.phase_labels()
 
     @property
     def outputs(self) -> dict[str, np.ndarray]:
@@ -247,7 +299,7 @@ class SimulationResult:
         y = self.y
         return y[2 * self.n + 1] if y.shape[0] > 2 * self.n + 1 else np.zeros(y.shape[1])
 
-    @cached_property
+    @computed_once
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity (see validity.py)."""
         from .validity import validity_warnings
@@ -293,25 +345,26 @@ class SimulationResult:
 
 def _fill_impact_energies(traj: Trajectory, n: int, impacts: list[Impact]) -> None:
     """Kinetic energy before and after each impact, and the works over it, from the samples."""
-    T = traj.outputs["T"]
     last = len(traj.t) - 1
     for impact in impacts:
         i0 = impact.i_start
         i1 = impact.i_end if impact.i_end is not None else last
-        impact.T_before, impact.T_after = float(T[i0]), float(T[i1])
         works = _budget(traj, n, i0, i1)
+        impact.T_before, impact.T_after = works["T0"], works["Tf"]
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
 
 
 def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> dict[str, float]:
-    """Energy budget between samples i0 and i1: the works against the change of T."""
+    """Energy budget between samples i0 and i1: the works against the change of T (and the
+    two kinetic energies, T0 and Tf)."""
     T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
-    W_n = float(y[i1, 2 * n] - y[i0, 2 * n])
-    W_f = float(y[i1, 2 * n + 1] - y[i0, 2 * n + 1]) if y.shape[1] > 2 * n + 1 else 0.0
-    W_g = float(V[i0] - V[i1])
+    T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
+    w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction] at both ends
+    W_n = w1[0] - w0[0]
+    W_f = w1[1] - w0[1] if len(w0) > 1 else 0.0
     return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g,
-            "residual": (float(T[i1]) - float(T[i0])) - (W_n + W_f + W_g)}
+            "residual": (Tf - T0) - (W_n + W_f + W_g), "T0": T0, "Tf": Tf}
 
 
 def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
@@ -339,31 +392,37 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
              count_open: bool) -> dict[str, Any]:
     """Samples i0 to i1 and the impacts in them; the switches are the first impact's."""
     traj, n = result.trajectory, result.n
-    T = traj.outputs["T"]
+    budget = _budget(traj, n, i0, i1)
+    T0, Tf = budget.pop("T0"), budget.pop("Tf")
     t_last = float(traj.t[i1])
-    deepest = max(impacts, key=lambda i: i.delta_r) if impacts else None
+    last = traj.y[i1].tolist()
     first = impacts[0] if impacts else None
+    deepest = max(impacts, key=_dent) if len(impacts) > 1 else first
     contact = sum((i.t_end if i.t_end is not None else t_last) - i.t_start
                   for i in impacts if i.t_end is not None or count_open)
     return {
-        "T0": float(T[i0]),
-        "Tf": float(T[i1]),
-        "delta_T": float(T[i0]) - float(T[i1]),
-        "delta_max": max((i.delta_max for i in impacts), default=0.0),
+        "T0": T0,
+        "Tf": Tf,
+        "delta_T": T0 - Tf,
+        "delta_max": max([i.delta_max for i in impacts], default=0.0),
         "delta_r": deepest.delta_r if deepest else 0.0,
-        "P_max": max((i.P_max for i in impacts), default=0.0),
+        "P_max": max([i.P_max for i in impacts], default=0.0),
         "R_res": deepest.R_res if deepest else 0.0,
         "t_contact": float(contact),
         "t_impact": first.t_start if first else None,
         "switches": _switch_list(first.switches) if first else [],
         "stick_slip": _switch_list(first.stick_slip) if first else [],
-        "u_final": [float(v) for v in traj.y[i1, n: 2 * n]],
-        "q_final": [float(v) for v in traj.y[i1, :n]],
+        "u_final": last[n: 2 * n],
+        "q_final": last[:n],
         "impacts": len(result.impacts),
         "t_sustained": _sustained_start(result.phases),
         "t_final": t_last,
-        "energy": _budget(traj, n, i0, i1),
+        "energy": budget,
     }
+
+
+def _dent(impact: Impact) -> float:
+    return impact.delta_r
 
 
 def _sustained_start(phases: list[PhaseSpan]) -> float | None:

@@ -9,6 +9,7 @@ message into one that says what to try.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -20,12 +21,11 @@ FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
 
 
-@dataclass(frozen=True)
-class Segment:
+class Segment(NamedTuple):
     """One phase segment of a run, as ig_run recorded it (see cvode_glue.h's ig_segment)."""
 
     t: float  # its end
-    sample: int  # index of its last sample in the run's samples
+    sample: int  # index of its last sample in the run's samples (the start is sample 0)
     state: int  # machine state during it
     slip: float
     event: int  # the model event that ended it, -1 at the end time
@@ -38,11 +38,15 @@ class Segment:
     R_res: float
     params: object  # a copy of the model_params it ran under (cffi), when asked for, else None
 
-    @classmethod
-    def read(cls, seg, base: int, ffi, with_params: bool) -> "Segment":
-        return cls(seg.t, base + seg.sample, seg.state, seg.slip, seg.event, seg.act, seg.next_state,
-                   seg.next_slip, seg.delta_max, seg.P_max, seg.delta_r, seg.R_res,
-                   ffi.new("model_params *", seg.params) if with_params else None)
+
+
+def struct_dtype(ffi, ctype: str, skip: tuple[str, ...] = ()) -> np.dtype:
+    """A numpy view of a C struct of doubles and integers (its other fields left out), laid
+    out as the compiler laid it out: read a whole array of records in one call."""
+    fields = [(name, f) for name, f in ffi.typeof(ctype).fields if name not in skip]
+    return np.dtype({"names": [name for name, _ in fields],
+                     "formats": ["f8" if f.type.cname == "double" else f"i{ffi.sizeof(f.type)}" for _, f in fields],
+                     "offsets": [f.offset for _, f in fields], "itemsize": ffi.sizeof(ctype)})
 
 
 @dataclass
@@ -61,51 +65,67 @@ class MachineRun:
 
 
 class CvodeSession:
-    """One CVODE integrator for a whole simulation. `open` reuses an idle one of the same
-    model and method (a warm process then allocates nothing per run); `close` returns it."""
+    """One CVODE integrator for a whole simulation, with the run's C buffers (the phase
+    machine, the tolerances, the samples). `open` reuses an idle one of the same model and
+    method (a warm process then allocates nothing per run); `close` returns it."""
 
     _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
 
     @staticmethod
     def _pool_key(model: CompiledModel, scene: Scene) -> tuple:
-        return model.spec, str(model.path), scene.solver.method
+        return model.path, scene.solver.method  # the cache entry names the spec
 
     @classmethod
-    def open(cls, model: CompiledModel, scene: Scene, atol) -> "CvodeSession":
+    def open(cls, model: CompiledModel, scene: Scene) -> "CvodeSession":
+        """An idle session of this model and method, or a new one; `reset` it before a run."""
         try:
-            session = cls._idle.get(cls._pool_key(model, scene), []).pop()
+            return cls._idle.get(cls._pool_key(model, scene), []).pop()
         except IndexError:
-            return cls(model, scene, atol)
-        lib = model.lib
-        if lib.ig_solver_reset(session.solver, scene.solver.rtol, atol, scene.solver.max_steps) != 0:
-            raise SolverError(f"cannot reset the CVODE solver: {session._message()}")
-        return session
+            return cls(model, scene)
 
     def close(self, scene: Scene) -> None:
         """Hand the integrator back for the next run (only after a run that ended normally)."""
         self._idle.setdefault(self._pool_key(self.model, scene), []).append(self)
 
-    def __init__(self, model: CompiledModel, scene: Scene, atol):
+    def __init__(self, model: CompiledModel, scene: Scene):
         self.model = model
-        ffi, lib = model.ffi, model.lib
-        err = ffi.new("char[]", 512)
-        method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5, _AUTO
-        analytic = 1 if uses_jacobian(model, scene) else 0
-        solver = lib.ig_solver_new(method, analytic, scene.solver.rtol, atol, scene.solver.max_steps, err, 512)
-        if solver == ffi.NULL:
-            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
-        self.solver = ffi.gc(solver, lib.ig_solver_free)
+        ffi = model.ffi
+        self.method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5, _AUTO
+        self.analytic = 1 if uses_jacobian(model, scene) else 0
+        self.solver = None  # made by the first reset, which knows the tolerances
         self.capacity = FIRST_BUFFER
-        self.dense_terms = int(lib.ig_dense_terms(self.solver))
+        self.dense_terms = 0
         self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
-        self._alloc()
         # the run's arguments, allocated once
+        self.machine = ffi.new("model_machine *")
+        self.atol_now = ffi.new("double[]", model.nstate)
         self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
+        self.segment_rows = np.frombuffer(ffi.buffer(self.segments), struct_dtype(ffi, "ig_segment", ("params",)))
         self.n_segments = ffi.new("int *")
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
         self.y0 = np.empty(model.nstate)
         self.y0_c = ffi.from_buffer("double[]", self.y0)
+        self.output_index = {name: k for k, name in enumerate(model.output_names)}
+        self._stats = ffi.new("ig_stats *")
+        self._stats_row = np.frombuffer(ffi.buffer(self._stats), struct_dtype(ffi, "ig_stats"))
+
+    def reset(self, scene: Scene) -> None:
+        """Prepare the integrator for a run with the scene's tolerances (the absolute ones
+        the started machine asks for, in `atol_now`)."""
+        ffi, lib = self.model.ffi, self.model.lib
+        rtol, max_steps = scene.solver.rtol, scene.solver.max_steps
+        if self.solver is not None:
+            if lib.ig_solver_reset(self.solver, rtol, self.atol_now, max_steps) != 0:
+                raise SolverError(f"cannot reset the CVODE solver: {self._message()}")
+            return
+        err = ffi.new("char[]", 512)
+        solver = lib.ig_solver_new(self.method, self.analytic, rtol, self.atol_now, max_steps, err, 512)
+        if solver == ffi.NULL:
+            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
+        self.solver = ffi.gc(solver, lib.ig_solver_free)
+        self.dense_terms = int(lib.ig_dense_terms(self.solver))
+        self._alloc()
 
     def _alloc(self) -> None:
         ffi = self.model.ffi
@@ -117,6 +137,10 @@ class CvodeSession:
         self.out_buf = ffi.from_buffer("double[]", self.out_samples)
         self.d_samples = np.empty((self.capacity, self.dense_terms, self.model.nstate)) if self.dense else None
         self.d_buf = ffi.from_buffer("double[]", self.d_samples) if self.dense else ffi.NULL
+        nstate, nout = self.model.nstate, len(self.model.output_names)
+        self.buffers = (self.t_buf, self.y_buf, self.out_buf, self.d_buf)
+        self.after_start = (self.t_buf + 1, self.y_buf + nstate, self.out_buf + nout,  # row 0 is the start
+                            self.d_buf + self.dense_terms * nstate if self.dense else ffi.NULL)
 
     def keep_polynomials(self, dense: bool) -> None:
         """Ask for (or stop asking for) each step's Taylor coefficients from the next segment on."""
@@ -124,37 +148,57 @@ class CvodeSession:
             self.dense = dense
             self._alloc()
 
-    def run(self, machine, params, t0: float, y0: np.ndarray, t_stop: float, atol: float,
-            max_segments: int, every_step: bool, with_params: bool = False) -> "MachineRun":
-        """Run the phase machine (a started `model_machine *`) from (t0, y0) to t_stop in C
-        (ig_run), one call per buffer's worth: every step a sample when `every_step`, else
-        only each segment's end. The samples exclude (t0, y0). `with_params` keeps a copy of
-        each segment's parameters (to evaluate outputs between its samples)."""
+    def run(self, params, t0: float, t_stop: float, atol: float, max_segments: int, every_step: bool,
+            with_params: bool = False) -> "MachineRun":
+        """Run the phase machine (`machine`, started from (t0, `y0`)) to t_stop in C (ig_run),
+        one call per buffer's worth: every step a sample when `every_step`, else only each
+        segment's end. The samples begin with (t0, y0) as sample 0, its outputs under
+        `params`. `with_params` keeps a copy of each segment's parameters (to evaluate
+        outputs between its samples)."""
         ffi, lib = self.model.ffi, self.model.lib
-        self.y0[:] = y0
+        self.t_samples[0] = t0
+        self.y_samples[0] = self.y0
+        lib.ig_outputs(params, 1, self.t_buf, self.y_buf, self.out_buf)
         self.t_now[0] = t0
         dense = self.dense and every_step
+        if dense:
+            self.d_samples[0] = 0.0  # the start ends no step: it has no polynomial
         chunks: list[tuple[np.ndarray, ...]] = []
         segments: list[Segment] = []
-        base = 0
+        base, skip = 0, 1  # the first call writes after the start's row
         while True:
-            flag = lib.ig_run(self.solver, machine, params, self.t_now, self.y0_c, t_stop, atol,
-                              max_segments - len(segments), int(every_step), self.t_buf, self.y_buf,
-                              self.out_buf, self.d_buf if dense else ffi.NULL, self.capacity, self.n_out,
-                              self.segments, SEGMENT_CAPACITY, self.n_segments)
-            k = self.n_out[0]
+            t_buf, y_buf, out_buf, d_buf = self.after_start if skip else self.buffers
+            flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, atol,
+                              max_segments - len(segments), every_step, t_buf, y_buf, out_buf,
+                              d_buf if dense else ffi.NULL, self.capacity - skip, self.n_out, self.segments,
+                              SEGMENT_CAPACITY, self.n_segments)
+            k = self.n_out[0] + skip
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            segments.extend(Segment.read(self.segments[j], base, ffi, with_params) for j in range(self.n_segments[0]))
-            base += k
+            base += skip
+            segments.extend(self._segments(base, with_params))
+            base += k - skip
+            skip = 0
             if flag == lib.IG_BUFFER_FULL and every_step:
                 self.capacity *= 2
                 self._alloc()
             if flag not in (lib.IG_BUFFER_FULL, lib.IG_SEGMENTS_FULL):
                 break
-        t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
+        if len(chunks) == 1:
+            t, y, out, d = chunks[0]
+        else:
+            t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
         return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]))
+
+    def _segments(self, base: int, with_params: bool) -> list[Segment]:
+        """The segment records of the last ig_run call, their sample indices from `base` on."""
+        count = self.n_segments[0]
+        rows = self.segment_rows[:count].tolist()
+        params = ([self.model.ffi.new("model_params *", self.segments[j].params) for j in range(count)]
+                  if with_params else [None] * count)
+        make = Segment._make
+        return [make((r[0], base + r[1], *r[2:], p)) for r, p in zip(rows, params)]
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
@@ -166,10 +210,8 @@ class CvodeSession:
         return out
 
     def stats(self) -> dict[str, int]:
-        st = self.model.ffi.new("ig_stats *")
-        self.model.lib.ig_solver_stats(self.solver, st)
-        return {k: int(getattr(st, k)) for k in ("nsteps", "nfev", "njev", "nlinsetups",
-                                                   "netfails", "nnlsfails", "ngev", "nstiff")}
+        self.model.lib.ig_solver_stats(self.solver, self._stats)
+        return dict(zip(self._stats_row.dtype.names, self._stats_row[0].tolist()))
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
