@@ -563,7 +563,8 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
             solver = dataclasses.replace(solver, **{key: checked})
         else:  # the name
             fields[key] = checked
-    chain = dataclasses.replace(chain, length=tuple(length), mass=tuple(mass))
+    if length != list(chain.length) or mass != list(chain.mass):
+        chain = dataclasses.replace(chain, length=tuple(length), mass=tuple(mass))
     scene = dataclasses.replace(base, chain=chain, rod=rod, surface=surface, contact=contact, solver=solver,
                                 q0=tuple(q0), u0=tuple(u0), **fields)
     _check_physics(scene)

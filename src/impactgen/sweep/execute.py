@@ -1,7 +1,7 @@
 """Where the chunks of a sweep run: this process, a local process pool, or a Dask cluster.
 
-Every backend yields the rows of each chunk as it finishes, so the caller writes them at
-once. A chunk whose worker dies is run again: the process pool is restarted with the chunks
+Every backend yields what the chunk function returns for each chunk as it finishes (or the
+rows of `lost_rows`), so the caller writes them at once. A chunk whose worker dies is run again: the process pool is restarted with the chunks
 it had not returned (at most MAX_CHUNK_TRIES times each), and Dask reschedules the tasks of a
 lost worker itself (its `distributed.scheduler.allowed-failures`). A chunk that keeps killing
 its workers ends as rows with status "failed", so no case is ever missing from the table.
@@ -25,7 +25,7 @@ MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as faile
 ABANDON_JOIN_S = 5.0  # s to wait for each killed worker of a broken pool
 
 Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)
-RunChunk = Callable[[dict[str, Any], Chunk, Any], list[dict[str, Any]]]
+RunChunk = Callable[[dict[str, Any], Chunk, Any], Any]  # the rows of a chunk, in the caller's form
 
 
 def chunked(cases: Chunk, workers: int) -> list[Chunk]:
@@ -39,13 +39,13 @@ def lost_rows(chunk: Chunk, reason: str) -> list[dict[str, Any]]:
             for i, overrides in chunk]
 
 
-def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk) -> Iterator[list[dict]]:
+def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk) -> Iterator[Any]:
     for chunk in chunked(todo, 1):
         yield run_chunk(payload, chunk, options)
 
 
 def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
-                 workers: int) -> Iterator[list[dict]]:
+                 workers: int) -> Iterator[Any]:
     """A local pool of `workers` processes; a pool broken by a dead worker is started again
     with the chunks it had not returned."""
     queue = [(chunk, 0) for chunk in chunked(todo, workers)]
@@ -123,7 +123,7 @@ def _start_method() -> multiprocessing.context.BaseContext:
 
 
 def dask_cluster(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
-                 scheduler: str, workers: int | None) -> Iterator[list[dict]]:
+                 scheduler: str, workers: int | None) -> Iterator[Any]:
     """The chunks as tasks on a Dask distributed cluster: `scheduler` is its address
     (tcp://HOST:PORT), or "local" for a LocalCluster of `workers` processes started here."""
     try:

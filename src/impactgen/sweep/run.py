@@ -12,11 +12,13 @@ import json
 import os
 import time
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
 import numpy as np
 
+from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
 from ..scene import Scene, scene_from_dict, scene_with
@@ -40,7 +42,6 @@ class CaseOptions:
 def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
     """One case of the scene `base`: its varied inputs, every scalar summary field, status,
     message, warnings, time."""
-    import impactgen
     started = time.perf_counter()
     row: dict[str, Any] = {"case": index, **overrides}
     try:
@@ -50,7 +51,7 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
                    wall_s=time.perf_counter() - started)
         return row
     try:
-        result = impactgen.simulate(scene, record_steps=keep_trajectory)  # the summaries need no steps
+        result = simulate(scene, record_steps=keep_trajectory)  # the summaries need no steps
     except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
         row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
         return row
@@ -68,19 +69,56 @@ def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
     for key, value in summary.items():
         if key in ("switches", "stick_slip"):
             row[f"n_{key}"] = len(value)
-        elif key == "energy":
-            row.update({f"energy.{k}": v for k, v in value.items()})
-        elif isinstance(value, list):
-            row.update({f"{key}[{i}]": v for i, v in enumerate(value, start=1)})
+        elif key == "energy" or isinstance(value, list):
+            row.update(zip(_column_names(key, tuple(value) if key == "energy" else len(value)),
+                           value.values() if key == "energy" else value))
         else:
             row[key] = value
     return row
 
 
-def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> list[dict[str, Any]]:
+@lru_cache(maxsize=256)
+def _column_names(key: str, items: tuple[str, ...] | int) -> tuple[str, ...]:
+    """The columns of a summary entry that holds several values: energy.W_normal, ... for a
+    dict's keys, u_final[1], ... for a list's length (made once, not per case)."""
+    if isinstance(items, int):
+        return tuple(f"{key}[{i}]" for i in range(1, items + 1))
+    return tuple(f"{key}.{k}" for k in items)
+
+
+@dataclass
+class ChunkRows:
+    """The rows of a chunk as columns (one list per column, None where a row has no value),
+    and the trajectories kept: what a worker sends back. Columns cost the driver, which
+    shares the cores with the workers, one conversion per column instead of one per value."""
+
+    columns: dict[str, list[Any]]
+    trajectories: dict[int, dict[str, tuple[np.ndarray, str]]]
+
+    @classmethod
+    def from_rows(cls, rows: list[dict[str, Any]]) -> "ChunkRows":
+        kept = {row["case"]: row.pop(TRAJECTORY) for row in rows if TRAJECTORY in row}
+        names = dict.fromkeys(name for row in rows for name in row)  # first-seen order
+        return cls({name: [row.get(name) for row in rows] for name in names}, kept)
+
+    def __len__(self) -> int:
+        return len(self.columns.get("case", ()))
+
+    def extend(self, other: "ChunkRows") -> None:
+        """Append the rows of `other` (a column one of them lacks is None there)."""
+        n, m = len(self), len(other)
+        for name in other.columns:
+            if name not in self.columns:  # in the order the columns come
+                self.columns[name] = [None] * n
+        for name, values in self.columns.items():
+            values.extend(other.columns.get(name, [None] * m))
+
+
+def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> ChunkRows:
     """The rows of some cases of one scene (what a worker process or Dask task runs)."""
     base = scene_from_dict(scene_dict)
-    return [case_row(base, index, overrides, index in options.keep_trajectories) for index, overrides in cases]
+    return ChunkRows.from_rows([case_row(base, index, overrides, index in options.keep_trajectories)
+                                for index, overrides in cases])
 
 
 def evenly_chosen(count: int, total: int) -> frozenset[int]:
@@ -135,10 +173,10 @@ class OutputFolder:
         import pyarrow.parquet as pq
         return [pq.read_table(part).to_pandas() for part in sorted(self.parts.glob("part-*.parquet"))]
 
-    def write_part(self, rows: list[dict[str, Any]]) -> None:
+    def write_part(self, chunk: ChunkRows) -> None:
         import pyarrow as pa
-        first = min(r["case"] for r in rows)
-        write_table(pa.Table.from_pylist(rows),
+        first = min(chunk.columns["case"])
+        write_table(pa.Table.from_pydict(chunk.columns),
                     self.parts / f"part-{first:09d}-{os.getpid()}-{time.monotonic_ns()}.parquet")
 
     def write_trajectory(self, case: int, columns: dict[str, tuple[np.ndarray, str]]) -> None:
@@ -182,24 +220,24 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
         raise SceneError("--trajectories", "kept trajectories are written into the --out folder: give one")
     folder = OutputFolder(out, scene, spec) if out is not None else None
     try:
-        frames = folder.done() if folder else []  # one small DataFrame per chunk: columns, not row dicts
+        frames = folder.done() if folder else []  # one DataFrame per part of an earlier run
         finished = {int(i) for f in frames for i in f["case"]}
         if finished and on_resume:
             on_resume(len(finished))
         if progress and finished:
             progress(len(finished))
         todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in finished]
-        for chunk_rows in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
-            for row in chunk_rows:
-                kept = row.pop(TRAJECTORY, None)
-                if kept is not None and folder:
-                    folder.write_trajectory(row["case"], kept)
+        rows = ChunkRows({}, {})  # every new row, made a DataFrame once at the end
+        for done in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
+            chunk = done if isinstance(done, ChunkRows) else ChunkRows.from_rows(done)  # lost rows come as rows
             if folder:
-                folder.write_part(chunk_rows)
-            frames.append(pd.DataFrame(chunk_rows))
+                for case, kept in chunk.trajectories.items():
+                    folder.write_trajectory(case, kept)
+                folder.write_part(chunk)
+            rows.extend(chunk)
             if progress:
-                progress(len(chunk_rows))
-        frame = _table(frames, spec)
+                progress(len(chunk))
+        frame = _table(frames + [pd.DataFrame(rows.columns)] if len(rows) else frames, spec)
         if folder:
             folder.write_result(frame)
         return frame
@@ -237,7 +275,7 @@ def _kept_cases(trajectories: int | Iterable[int], total: int) -> frozenset[int]
 
 
 def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: int | None,
-             scheduler: str | None) -> Iterable[list[dict[str, Any]]]:
+             scheduler: str | None) -> Iterable[ChunkRows | list[dict[str, Any]]]:
     if not todo:
         return iter(())
     payload = scene.to_dict()
