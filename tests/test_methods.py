@@ -45,6 +45,21 @@ def test_the_plain_c_pair_finds_every_impact_of_a_chattering_run():
     assert np.all(rk.delta <= 1.01 * max(i.delta_max for i in rk.impacts))  # never through the surface
 
 
+@pytest.mark.parametrize("u1, rtol", [(-0.08625, 1e-4), (-0.08625, 1e-6), (-0.08625, 1e-7), (-0.0865, 1e-4),
+                                      (-0.08675, 1e-4)])
+def test_the_plain_c_pair_finds_a_grazing_yield(u1, rtol):
+    """Just past the yield onset the tip crosses delta = 1.9 delta_c up and back down around
+    the maximum compression, a few us apart: one explicit step can hold both crossings, and
+    the maximum compression that ends it must not hide the yield before it (the pair once
+    went from elastic straight to restitution in each of these runs)."""
+    scene = impactgen.load_scene("paper", overrides={"initial.u": [u1, 0.0]})
+    reference = impactgen.simulate(scene, method="bdf", rtol=1e-11)
+    assert [p.phase for p in reference.phases] == ["elastic", "elastoplastic", "restitution"]
+    rk = impactgen.simulate(scene, method="dopri5", rtol=rtol)
+    assert [p.phase for p in rk.phases] == ["elastic", "elastoplastic", "restitution"]
+    assert rk.summary["delta_r"] == pytest.approx(reference.summary["delta_r"], rel=20 * rtol)
+
+
 @pytest.mark.parametrize("overrides", [
     {"contact.friction": 2.0, "contact.friction_eps": 1e-10},  # the stuck tip's regularized friction
     {"solver.t_end": 5.0},  # the resting tip of sustained contact

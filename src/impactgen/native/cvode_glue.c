@@ -33,6 +33,7 @@ struct ig_solver {
     void *erk;        /* ARKODE ERKStep instead of CVODE (method IG_METHOD_ERK): explicit Runge-Kutta */
     ig_dopri5 *rk;    /* the plain-C pair instead (IG_METHOD_DOPRI5), or first (IG_METHOD_AUTO) */
     int on_cvode;     /* CVODE integrates the segment under way (always for BDF and Adams) */
+    int continued;    /* a segment of this run has begun: the next may start from its last step */
     int dirs[MODEL_NEVENT];
     N_Vector y;
     N_Vector abstol;
@@ -278,6 +279,7 @@ int ig_solver_reset(ig_solver *s, double rtol, const double *atol, long max_step
     s->rtol = rtol;
     s->max_steps = max_steps;
     s->active = 0;
+    s->continued = 0;
     s->counted = 1;
     memset(&s->total, 0, sizeof s->total);
     s->message[0] = '\0';
@@ -357,8 +359,12 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
 
     memcpy(N_VGetArrayPointer(s->y), y0, sizeof(double) * MODEL_NSTATE);
     if (s->rk) {
+        /* the step the pair proposed at the end of the segment before in this run (not after
+         * CVODE took over) */
+        const double hint = s->continued && !s->on_cvode ? s->rk->h : 0.0;
+        s->continued = 1;
         if (ig_dopri5_start(s->rk, params, t0, y0, t_stop, s->rtol, N_VGetArrayPointer(s->abstol), events,
-                            directions, nevents) != 0) {
+                            directions, nevents, hint) != 0) {
             set_message(s, "the right-hand side is not finite at the start of the phase");
             return IG_ERR_SOLVER;
         }

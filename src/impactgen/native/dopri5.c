@@ -17,6 +17,9 @@
 #define ROOT_TOLERANCE 100.0  /* a root is located to this many ulps of max(|t|, |h|) (as CVODE) */
 #define ROOT_ITERATIONS 200
 #define INSIDE_POINTS 4   /* points inside a step where not-yet-armed events are looked at */
+#define FAC_MIN_START 1e-3 /* until a start's first step is accepted, a rejected step shrinks by the error's
+                            * own h^5 law (at most this much): the starting guess can be far off where a
+                            * force law begins at 0 (Hertz's delta^1.5 at first contact) */
 
 /* Dormand and Prince's tableau, its error weights and its dense-output weights. */
 static const double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
@@ -84,7 +87,8 @@ static double first_step(ig_dopri5 *r, double *scratch, double *f1)
 }
 
 int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const double *y0, double t_stop,
-                    double rtol, const double *atol, const int *events, const int *directions, int nevents)
+                    double rtol, const double *atol, const int *events, const int *directions, int nevents,
+                    double h_hint)
 {
     r->params = params;
     r->rtol = rtol;
@@ -103,6 +107,7 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
     }
     if (rhs(r, t0, r->y, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
     r->h = first_step(r, r->k[1], r->k[2]);
+    if (h_hint > 0.0) r->h = fmin(r->h, h_hint);
     watched(r, t0, r->y, r->g);
     int at_zero = 0;
     for (int k = 0; k < nevents; ++k) {
@@ -278,7 +283,8 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         double h_new = h / fac;
         if (err > 1.0) {  /* rejected: a smaller step */
             r->netfails++;
-            r->h = h / fmin(1.0 / FAC_MIN, fac11 / SAFE);
+            r->h = r->nsteps == 0 ? h * fmax(FAC_MIN_START, SAFE * pow(err, -0.2))
+                                  : h / fmin(1.0 / FAC_MIN, fac11 / SAFE);
             r->rejected = 1;
             continue;
         }
@@ -291,7 +297,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
         if (r->rejected) h_new = fmin(h_new, h);
         const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
-        r->h = h_new;
+        r->h = last ? fmax(h_new, r->h) : h_new;  /* a step cut to t_stop proposes what it was cut from */
         r->nsteps++;
         r->rejected = 0;
         if (unstable) {
@@ -327,6 +333,23 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
                 const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
                 t_root[k] = locate(r, k, t_lo, lo, t_hi, g_hi[k], tol);
                 first = fmin(first, t_root[k]);
+            }
+            /* an event back on its old side at t_hi may have crossed and come back before the
+             * root found (the yield of a grazing impact, crossed up and down about the maximum
+             * compression that ends the step): looked at on the shortened interval too */
+            for (int pass = 0; pass < r->nevents; ++pass) {
+                double y_first[N], g_first[MODEL_NEVENT];
+                ig_dopri5_interpolate(r, first, y_first);
+                watched(r, first, y_first, g_first);
+                int more = 0;
+                for (int k = 0; k < r->nevents; ++k) {
+                    if (t_root[k] < INFINITY || !crossed(r, k, g_first[k])) continue;
+                    const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;
+                    t_root[k] = locate(r, k, t_lo, lo, first, g_first[k], tol);
+                    first = fmin(first, t_root[k]);
+                    more = 1;
+                }
+                if (!more) break;
             }
             for (int k = 0; k < r->nevents; ++k) roots_found[k] = t_root[k] <= first + tol;
             if (first < r->t) {

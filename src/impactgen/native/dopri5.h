@@ -50,9 +50,13 @@ typedef struct {
 
 /* Begin a segment at (t0, y0) under params, to t_stop, watching events[0..nevents) in their
  * directions (+1 rising, -1 falling, 0 both). rtol and atol (MODEL_NSTATE entries) are the
- * tolerances. The counters start again from 0. Returns 0, or IG_DOPRI5_RHS_FAILED. */
+ * tolerances. The first step is Hairer's estimate, at most h_hint when h_hint > 0 (the step
+ * the segment before proposed next, r->h: a continuous force law carries its time scale over
+ * a switch).
+ * The counters start again from 0. Returns 0, or IG_DOPRI5_RHS_FAILED. */
 int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const double *y0, double t_stop,
-                    double rtol, const double *atol, const int *events, const int *directions, int nevents);
+                    double rtol, const double *atol, const int *events, const int *directions, int nevents,
+                    double h_hint);
 /* One accepted step (after any rejected ones): IG_DOPRI5_STEPPED, _ROOT (roots_found flags
  * the watched events that crossed; r->t, r->y are just past the root), _STOP, or < 0.
  * r->stiff turns 1 when IG_DOPRI5_STIFF_STEPS accepted steps had h |lambda| beyond the pair's
