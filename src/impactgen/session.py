@@ -8,7 +8,6 @@ message into one that says what to try.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -49,8 +48,7 @@ def struct_dtype(ffi, ctype: str, skip: tuple[str, ...] = ()) -> np.dtype:
                      "offsets": [f.offset for _, f in fields], "itemsize": ffi.sizeof(ctype)})
 
 
-@dataclass
-class MachineRun:
+class MachineRun(NamedTuple):
     """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
     ig_run's last return code with the message of a failure, and the time the run stopped."""
 
@@ -105,6 +103,7 @@ class CvodeSession:
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
         self.y0 = np.empty(model.nstate)
+        self.works_at_start = (0.0,) * (model.nstate - 2 * model.spec.links)  # W_normal[, W_friction]
         self.y0_c = ffi.from_buffer("double[]", self.y0)
         self.output_index = {name: k for k, name in enumerate(model.output_names)}
         self._stats = ffi.new("ig_stats *")
