@@ -565,8 +565,9 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
             fields[key] = checked
     if length != list(chain.length) or mass != list(chain.mass):
         chain = dataclasses.replace(chain, length=tuple(length), mass=tuple(mass))
-    scene = dataclasses.replace(base, chain=chain, rod=rod, surface=surface, contact=contact, solver=solver,
-                                q0=tuple(q0), u0=tuple(u0), **fields)
+    scene = Scene(fields.get("name", base.name), chain, rod, fields.get("tip_radius", base.tip_radius), surface,
+                  fields.get("surface_height", base.surface_height), contact, tuple(q0), tuple(u0), solver,
+                  base.source)  # dataclasses.replace would take twice as long: this runs once per sweep case
     _check_physics(scene)
     return scene
 

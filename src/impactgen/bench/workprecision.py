@@ -96,10 +96,11 @@ def measure(contender: Contender, name: str, scene: Scene, rtol: float, truth: T
             settings: Settings) -> Run:
     run = Run(name, contender.name, contender.family, rtol, "ok")
     times: list[float] = []
+    given = contender.prepare(scene, rtol, settings.budget)
     while len(times) < settings.repeats or (sum(times) < settings.min_time_s and len(times) < MAX_REPEATS):
         started = time.perf_counter()
         try:
-            result = contender.run(scene, rtol, settings.budget)
+            result = contender.run(given, rtol, settings.budget)
         except BudgetExceeded:
             run.status = "budget"
             return run
@@ -137,7 +138,8 @@ def run_workprecision(settings: Settings) -> tuple[list[Run], list[Truth], list[
         truth = compute_truth(name, scene)
         truths.append(truth)
         for contender in contenders:
-            contender.run(scene, settings.rtols[0], settings.budget)  # warm: build, import, JIT
+            contender.run(contender.prepare(scene, settings.rtols[0], settings.budget), settings.rtols[0],
+                          settings.budget)  # warm: build, import, JIT
             stopped = False
             for rtol in settings.rtols:
                 done += 1
