@@ -245,7 +245,7 @@ _ENVIRONMENT = ("IMPACTGEN_CACHE_DIR", "XDG_CACHE_HOME", "HOME", "IMPACTGEN_SANI
 def _environment() -> tuple[str | None, ...]:
     """The variables that choose the cache folder and the flags: read on every call, since a
     warm simulation looks its model up once per run."""
-    return tuple(os.environ.get(name) for name in _ENVIRONMENT)
+    return tuple(map(os.environ.get, _ENVIRONMENT))
 
 
 def compile_model(spec: ModelSpec) -> CompiledModel:

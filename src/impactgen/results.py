@@ -361,8 +361,11 @@ def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> dict[str, float]:
     T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
     T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
     w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction] at both ends
-    W_n = w1[0] - w0[0]
-    W_f = w1[1] - w0[1] if len(w0) > 1 else 0.0
+    return _balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if len(w0) > 1 else 0.0, W_g)
+
+
+def _balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
+    """The works, what the change of T leaves of them (residual), and the two T."""
     return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g,
             "residual": (Tf - T0) - (W_n + W_f + W_g), "T0": T0, "Tf": Tf}
 
@@ -377,7 +380,10 @@ def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
     impact = result.impacts[0] if result.impacts else None
     i0 = impact.i_start if impact else 0
     i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
-    return _summary(result, i0, i1, [impact] if impact else [], count_open=False)
+    budget = None  # the impact's energies were read from the same two samples when the result was made
+    if impact is not None:
+        budget = _balance(impact.T_before, impact.T_after, impact.W_normal, impact.W_friction, impact.W_gravity)
+    return _summary(result, i0, i1, [impact] if impact else [], count_open=False, budget=budget)
 
 
 def _run_summary(result: SimulationResult) -> dict[str, Any]:
@@ -389,10 +395,11 @@ def _run_summary(result: SimulationResult) -> dict[str, Any]:
 
 
 def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
-             count_open: bool) -> dict[str, Any]:
-    """Samples i0 to i1 and the impacts in them; the switches are the first impact's."""
+             count_open: bool, budget: dict[str, float] | None = None) -> dict[str, Any]:
+    """Samples i0 to i1 and the impacts in them; the switches are the first impact's.
+    `budget`: the energy budget between the two samples, if already known (`_budget`)."""
     traj, n = result.trajectory, result.n
-    budget = _budget(traj, n, i0, i1)
+    budget = _budget(traj, n, i0, i1) if budget is None else budget
     T0, Tf = budget.pop("T0"), budget.pop("Tf")
     t_last = float(traj.t[i1])
     last = traj.y[i1].tolist()
