@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ImpactgenError, SceneError
-from .results import SimulationResult
+from .results import SimulationResult, energy_balance
 
 PHASE_COLOURS = {"free": None, "elastic": "#cfe8ff", "elastoplastic": "#ffd9b3",
                  "restitution": "#d9f2d9", "reloading": "#f2d9f2", "sustained": "#e6e6e6"}
@@ -136,12 +136,11 @@ def _plot_window(plt, result: SimulationResult, out_dir: Path, mask: np.ndarray,
 
 
 def _budget_between(result: SimulationResult, i0: int, i1: int) -> dict[str, float]:
-    W_n = float(result.W_normal[i1] - result.W_normal[i0])
-    W_f = float(result.W_friction[i1] - result.W_friction[i0])
-    W_g = float(result.V[i0] - result.V[i1])
-    delta_T = float(result.T[i0] - result.T[i1])
-    return {"delta_T": delta_T, "W_normal": W_n, "W_friction": W_f, "W_gravity": W_g,
-            "residual": -delta_T - (W_n + W_f + W_g)}
+    """The energy budget between two of the samples shown (t_eval's, if given)."""
+    budget = energy_balance(float(result.T[i0]), float(result.T[i1]),
+                            float(result.W_normal[i1] - result.W_normal[i0]),
+                            float(result.W_friction[i1] - result.W_friction[i0]), float(result.V[i0] - result.V[i1]))
+    return {"delta_T": budget["T0"] - budget["Tf"], **budget}
 
 
 def _energy_bars(plt, result: SimulationResult, out_dir: Path, e: dict[str, float], which: str,

@@ -361,10 +361,10 @@ def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> dict[str, float]:
     T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
     T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
     w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction] at both ends
-    return _balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if len(w0) > 1 else 0.0, W_g)
+    return energy_balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if len(w0) > 1 else 0.0, W_g)
 
 
-def _balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
+def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
     """The works, what the change of T leaves of them (residual), and the two T."""
     return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g,
             "residual": (Tf - T0) - (W_n + W_f + W_g), "T0": T0, "Tf": Tf}
@@ -382,7 +382,7 @@ def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
     i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
     budget = None  # the impact's energies were read from the same two samples when the result was made
     if impact is not None:
-        budget = _balance(impact.T_before, impact.T_after, impact.W_normal, impact.W_friction, impact.W_gravity)
+        budget = energy_balance(impact.T_before, impact.T_after, impact.W_normal, impact.W_friction, impact.W_gravity)
     return _summary(result, i0, i1, [impact] if impact else [], count_open=False, budget=budget)
 
 
