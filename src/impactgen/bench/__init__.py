@@ -16,9 +16,15 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     from .scaling import scaling
     from .workprecision import FULL, QUICK, run_workprecision
     started = time.perf_counter()
-    runs, truths, notes = run_workprecision(QUICK if quick else FULL) if "workprecision" in parts else ([], [], [])
-    c_loop = {}
+    settings = QUICK if quick else FULL
+    runs, truths, notes = run_workprecision(settings) if "workprecision" in parts else ([], [], [])
+    c_loop, in_turn = {}, {}
     if "workprecision" in parts:
+        from .inturn import ROUNDS, time_in_turn
+        from .report import target_contenders
+        picked = target_contenders(runs)
+        if picked:
+            in_turn = time_in_turn(runs, "paper", *picked, settings, rounds=3 if quick else ROUNDS)
         from .cloop import c_loop as measure_c_loop
         c_loop = measure_c_loop()
     rhs_rows = rhs_benchmark((2, 3, 5) if quick else (2, 3, 5, 10, 20)) if "rhs" in parts else []
@@ -28,4 +34,4 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
         from .sweep import sweep_benchmark
         sweep_result = sweep_benchmark(quick)
     return write_report(out, "quick" if quick else "full", runs, truths, notes, rhs_rows, scaling_rows,
-                        time.perf_counter() - started, sweep_result, c_loop)
+                        time.perf_counter() - started, sweep_result, c_loop, in_turn)

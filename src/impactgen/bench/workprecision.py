@@ -95,28 +95,43 @@ def compute_truth(name: str, scene: Scene) -> Truth:
 def measure(contender: Contender, name: str, scene: Scene, rtol: float, truth: Truth,
             settings: Settings) -> Run:
     run = Run(name, contender.name, contender.family, rtol, "ok")
-    times: list[float] = []
-    given = contender.prepare(scene, rtol, settings.budget)
-    while len(times) < settings.repeats or (sum(times) < settings.min_time_s and len(times) < MAX_REPEATS):
-        started = time.perf_counter()
-        try:
-            result = contender.run(given, rtol, settings.budget)
-        except BudgetExceeded:
-            run.status = "budget"
-            return run
-        except Exception as exc:  # any contender may fail at some tolerance: record why
-            run.status = f"failed: {type(exc).__name__}: {str(exc)[:120]}"
-            return run
-        if not result.success:
-            run.status = f"failed: {result.message[:120]}"
-            return run
-        times.append(time.perf_counter() - started)
-        if times[-1] > settings.slow_s:
-            break
+    try:
+        times, result = repeat_timed(contender, scene, rtol, settings)
+    except BudgetExceeded:
+        run.status = "budget"
+        return run
+    except Exception as exc:  # any contender may fail at some tolerance: record why
+        run.status = f"failed: {type(exc).__name__}: {str(exc)[:120]}"
+        return run
+    if not result.success:
+        run.status = f"failed: {result.message[:120]}"
+        return run
     run.wall_s = statistics.median(times)
     run.err_u_final, run.err_delta_r, run.err_delta_T = errors(result.summary, truth.summary)
     run.nsteps, run.nfev = int(result.stats.get("nsteps", 0)), int(result.stats.get("nfev", 0))
     return run
+
+
+def log_log_at(a: tuple[float, float], b: tuple[float, float], error: float) -> float:
+    """The time at `error` on the straight line through (error, time) points a and b in
+    log-log coordinates (a's time when both have the same error)."""
+    (e1, t1), (e2, t2) = a, b
+    w = (math.log(error) - math.log(e1)) / (math.log(e2) - math.log(e1)) if e2 > e1 else 0.0
+    return math.exp(math.log(t1) + w * (math.log(t2) - math.log(t1)))
+
+
+def repeat_timed(contender: Contender, scene: Scene, rtol: float, settings: Settings) -> tuple[list[float], object]:
+    """Wall times of repeated runs (at least `repeats`, and until they add up to `min_time_s`;
+    a run slower than `slow_s` is not repeated) and the last result; a failed run ends it."""
+    times: list[float] = []
+    given = contender.prepare(scene, rtol, settings.budget)
+    while len(times) < settings.repeats or (sum(times) < settings.min_time_s and len(times) < MAX_REPEATS):
+        started = time.perf_counter()
+        result = contender.run(given, rtol, settings.budget)
+        times.append(time.perf_counter() - started)
+        if not result.success or times[-1] > settings.slow_s:
+            break
+    return times, result
 
 
 def progress_bar(done: int, total: int, text: str) -> None:
@@ -162,8 +177,7 @@ def time_at_error(runs: list[Run], error: float, key: str = "err_u_final") -> tu
         return math.nan, "no run"
     for (e1, t1), (e2, t2) in zip(pts, pts[1:]):
         if e1 <= error <= e2:
-            w = (math.log(error) - math.log(e1)) / (math.log(e2) - math.log(e1)) if e2 > e1 else 0.0
-            return math.exp(math.log(t1) + w * (math.log(t2) - math.log(t1))), "interpolated"
+            return log_log_at((e1, t1), (e2, t2), error), "interpolated"
     if error >= pts[-1][0]:
         return min(t for _, t in pts), "its loosest run is already this accurate"
     return math.nan, "not reached"
