@@ -81,7 +81,7 @@ def test_the_targets_take_the_contenders_timed_in_turn():
     """The target contenders are picked from the sweep (the default, the fastest scipy method,
     the reference's Radau and fastest), timed again side by side at the tolerances that bracket
     the error, and their times replace the sweep's in the targets' ratios."""
-    from impactgen.bench.inturn import _bracket, time_in_turn
+    from impactgen.bench.inturn import time_in_turn
     from impactgen.bench.report import DEFAULT, target_contenders, targets
 
     def run(name, rtol, err, ms):
@@ -93,8 +93,8 @@ def test_the_targets_take_the_contenders_timed_in_turn():
     assert error == 1e-7
     assert names[0] == DEFAULT and "scipy DOP853 + C RHS" in names and "scipy LSODA + C RHS" not in names
     assert "reference (LSODA, numpy)" in names and "reference (Radau, numpy)" in names
-    assert [rtol for _, rtol in _bracket([r for r in runs if r.contender == DEFAULT], error)] == [1e-10, 1e-6]
-    assert _bracket([r for r in runs if r.contender == DEFAULT], 1e-11) == []  # not reached: not timed
+    assert [r.rtol for r in wp.bracketing([r for r in runs if r.contender == DEFAULT], error)] == [1e-10, 1e-6]
+    assert wp.bracketing([r for r in runs if r.contender == DEFAULT], 1e-11) == []  # not reached: not timed
 
     timed = time_in_turn(runs, "paper", error, [DEFAULT], wp.QUICK, rounds=2)  # really run, twice
     assert list(timed["ms"]) == [DEFAULT] and len(timed["round_ms"][DEFAULT]) == 2

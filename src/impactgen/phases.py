@@ -61,8 +61,8 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     start = lib.model_machine_start(m, params, 0.0, session.y0_c, int(run_to_time))
     state0 = m.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
-        session.close(scene)
         first_row = session.outputs(params, np.array([0.0]), y[None, :])
+        session.close(scene)
         return _no_impact_at_start(scene, model, y.copy(), first_row[0].tolist(), start == lib.MODEL_START_ALONG,
                                    started)
     lib.model_machine_atol(m, params, solver.rtol, solver.atol, session.atol_now)

@@ -137,10 +137,10 @@ def _plot_window(plt, result: SimulationResult, out_dir: Path, mask: np.ndarray,
 
 def _budget_between(result: SimulationResult, i0: int, i1: int) -> dict[str, float]:
     """The energy budget between two of the samples shown (t_eval's, if given)."""
-    budget = energy_balance(float(result.T[i0]), float(result.T[i1]),
-                            float(result.W_normal[i1] - result.W_normal[i0]),
-                            float(result.W_friction[i1] - result.W_friction[i0]), float(result.V[i0] - result.V[i1]))
-    return {"delta_T": budget["T0"] - budget["Tf"], **budget}
+    T0, Tf = float(result.T[i0]), float(result.T[i1])
+    return {"delta_T": T0 - Tf, **energy_balance(T0, Tf, float(result.W_normal[i1] - result.W_normal[i0]),
+                                                 float(result.W_friction[i1] - result.W_friction[i0]),
+                                                 float(result.V[i0] - result.V[i1]))}
 
 
 def _energy_bars(plt, result: SimulationResult, out_dir: Path, e: dict[str, float], which: str,

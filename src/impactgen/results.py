@@ -349,25 +349,22 @@ def _fill_impact_energies(traj: Trajectory, n: int, impacts: list[Impact]) -> No
     for impact in impacts:
         i0 = impact.i_start
         i1 = impact.i_end if impact.i_end is not None else last
-        works = _budget(traj, n, i0, i1)
-        impact.T_before, impact.T_after = works["T0"], works["Tf"]
+        impact.T_before, impact.T_after, works = _budget(traj, n, i0, i1)
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
 
 
-def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> dict[str, float]:
-    """Energy budget between samples i0 and i1: the works against the change of T (and the
-    two kinetic energies, T0 and Tf)."""
+def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:
+    """Kinetic energy at samples i0 and i1, and the energy budget between them."""
     T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
     T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
     w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction] at both ends
-    return energy_balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if len(w0) > 1 else 0.0, W_g)
+    return T0, Tf, energy_balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if len(w0) > 1 else 0.0, W_g)
 
 
 def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
-    """The works, what the change of T leaves of them (residual), and the two T."""
-    return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g,
-            "residual": (Tf - T0) - (W_n + W_f + W_g), "T0": T0, "Tf": Tf}
+    """The works against the change of T from T0 to Tf, and what it leaves of them (residual)."""
+    return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g, "residual": (Tf - T0) - (W_n + W_f + W_g)}
 
 
 def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
@@ -382,7 +379,8 @@ def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
     i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
     budget = None  # the impact's energies were read from the same two samples when the result was made
     if impact is not None:
-        budget = energy_balance(impact.T_before, impact.T_after, impact.W_normal, impact.W_friction, impact.W_gravity)
+        budget = (impact.T_before, impact.T_after, energy_balance(impact.T_before, impact.T_after, impact.W_normal,
+                                                                  impact.W_friction, impact.W_gravity))
     return _summary(result, i0, i1, [impact] if impact else [], count_open=False, budget=budget)
 
 
@@ -395,12 +393,11 @@ def _run_summary(result: SimulationResult) -> dict[str, Any]:
 
 
 def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
-             count_open: bool, budget: dict[str, float] | None = None) -> dict[str, Any]:
+             count_open: bool, budget: tuple[float, float, dict[str, float]] | None = None) -> dict[str, Any]:
     """Samples i0 to i1 and the impacts in them; the switches are the first impact's.
-    `budget`: the energy budget between the two samples, if already known (`_budget`)."""
+    `budget`: what `_budget` gives for the two samples, if already known."""
     traj, n = result.trajectory, result.n
-    budget = _budget(traj, n, i0, i1) if budget is None else budget
-    T0, Tf = budget.pop("T0"), budget.pop("Tf")
+    T0, Tf, energy = _budget(traj, n, i0, i1) if budget is None else budget
     t_last = float(traj.t[i1])
     last = traj.y[i1].tolist()
     first = impacts[0] if impacts else None
@@ -424,7 +421,7 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
         "impacts": len(result.impacts),
         "t_sustained": _sustained_start(result.phases),
         "t_final": t_last,
-        "energy": budget,
+        "energy": energy,
     }
 
 

@@ -38,7 +38,6 @@ class Segment(NamedTuple):
     params: object  # a copy of the model_params it ran under (cffi), when asked for, else None
 
 
-
 def struct_dtype(ffi, ctype: str, skip: tuple[str, ...] = ()) -> np.dtype:
     """A numpy view of a C struct of doubles and integers (its other fields left out), laid
     out as the compiler laid it out: read a whole array of records in one call."""
@@ -164,7 +163,7 @@ class CvodeSession:
             self.d_samples[0] = 0.0  # the start ends no step: it has no polynomial
         chunks: list[tuple[np.ndarray, ...]] = []
         segments: list[Segment] = []
-        base, skip = 0, 1  # the first call writes after the start's row
+        base, skip = 0, 1  # samples before this call; the first call writes after the start's row
         while True:
             t_buf, y_buf, out_buf, d_buf = self.after_start if skip else self.buffers
             flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, atol,
@@ -174,10 +173,8 @@ class CvodeSession:
             k = self.n_out[0] + skip
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            base += skip
-            segments.extend(self._segments(base, with_params))
-            base += k - skip
-            skip = 0
+            segments.extend(self._segments(base + skip, with_params))
+            base, skip = base + k, 0
             if flag == lib.IG_BUFFER_FULL and every_step:
                 self.capacity *= 2
                 self._alloc()

@@ -13,22 +13,9 @@ from __future__ import annotations
 import statistics
 
 from .contenders import available_contenders
-from .workprecision import Run, Settings, bench_scenes, log_log_at, progress_bar, repeat_timed
+from .workprecision import Run, Settings, bench_scenes, bracketing, log_log_at, progress_bar, repeat_timed
 
 ROUNDS = 5  # each contender timed this many times, in turn with the others; medians
-
-
-def _bracket(runs: list[Run], error: float) -> list[tuple[float, float]]:
-    """(error, rtol) of the runs to time again: the two that bracket `error`, or the fastest
-    when even the loosest run is that accurate; none when no run reaches it."""
-    pts = sorted((r.err_u_final, r.rtol, r.wall_s) for r in runs if r.status == "ok" and r.err_u_final > 0)
-    for (e1, r1, _), (e2, r2, _) in zip(pts, pts[1:]):
-        if e1 <= error <= e2:
-            return [(e1, r1), (e2, r2)]
-    if pts and error >= pts[-1][0]:
-        fastest = min(pts, key=lambda p: p[2])
-        return [(fastest[0], fastest[1])]
-    return []
 
 
 def _at_error(points: list[tuple[float, float]], error: float) -> float:
@@ -44,7 +31,8 @@ def time_in_turn(runs: list[Run], scene_name: str, error: float, names: list[str
     contender that does not reach the error, or fails here, is left out."""
     contenders = {c.name: c for c in available_contenders()[0]}
     scene = bench_scenes((scene_name,))[scene_name]
-    plan = {name: _bracket([r for r in runs if r.scene == scene_name and r.contender == name], error)
+    plan = {name: [(r.err_u_final, r.rtol) for r in
+                   bracketing([r for r in runs if r.scene == scene_name and r.contender == name], error)]
             for name in names if name in contenders}
     plan = {name: points for name, points in plan.items() if points}
     seconds: dict[tuple[str, float], list[float]] = {(n, rtol): [] for n, pts in plan.items() for _, rtol in pts}

@@ -169,15 +169,27 @@ def run_workprecision(settings: Settings) -> tuple[list[Run], list[Truth], list[
     return runs, truths, notes
 
 
+def bracketing(runs: list[Run], error: float, key: str = "err_u_final") -> list[Run]:
+    """The ok runs to read the time for `error` from: the two whose errors bracket it, the
+    fastest when even the loosest run is that accurate, none when no run reaches it."""
+    ok = sorted((r for r in runs if r.status == "ok" and getattr(r, key) > 0), key=lambda r: getattr(r, key))
+    for a, b in zip(ok, ok[1:]):
+        if getattr(a, key) <= error <= getattr(b, key):
+            return [a, b]
+    if ok and error >= getattr(ok[-1], key):
+        return [min(ok, key=lambda r: r.wall_s)]
+    return []
+
+
 def time_at_error(runs: list[Run], error: float, key: str = "err_u_final") -> tuple[float, str]:
     """Wall time a contender needs for `error`, by log-log interpolation between its runs;
     ('', 'not reached') when its most accurate run is less accurate."""
-    pts = sorted((getattr(r, key), r.wall_s) for r in runs if r.status == "ok" and getattr(r, key) > 0)
-    if not pts:
+    if not any(r.status == "ok" and getattr(r, key) > 0 for r in runs):
         return math.nan, "no run"
-    for (e1, t1), (e2, t2) in zip(pts, pts[1:]):
-        if e1 <= error <= e2:
-            return log_log_at((e1, t1), (e2, t2), error), "interpolated"
-    if error >= pts[-1][0]:
-        return min(t for _, t in pts), "its loosest run is already this accurate"
+    pair = bracketing(runs, error, key)
+    if len(pair) == 2:
+        a, b = pair
+        return log_log_at((getattr(a, key), a.wall_s), (getattr(b, key), b.wall_s), error), "interpolated"
+    if pair:
+        return pair[0].wall_s, "its loosest run is already this accurate"
     return math.nan, "not reached"

@@ -326,30 +326,27 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         int any = 0;
         for (int k = 0; k < r->nevents; ++k) any |= crossed(r, k, g_hi[k]);
         if (any) {  /* the first crossing: each crossed event located, the earliest kept with any as close */
-            double t_root[MODEL_NEVENT], first = t_hi;
-            for (int k = 0; k < r->nevents; ++k) {
-                t_root[k] = INFINITY;
-                if (!crossed(r, k, g_hi[k])) continue;
-                const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
-                t_root[k] = locate(r, k, t_lo, lo, t_hi, g_hi[k], tol);
-                first = fmin(first, t_root[k]);
-            }
-            /* an event back on its old side at t_hi may have crossed and come back before the
-             * root found (the yield of a grazing impact, crossed up and down about the maximum
-             * compression that ends the step): looked at on the shortened interval too */
-            for (int pass = 0; pass < r->nevents; ++pass) {
-                double y_first[N], g_first[MODEL_NEVENT];
-                ig_dopri5_interpolate(r, first, y_first);
-                watched(r, first, y_first, g_first);
-                int more = 0;
+            double t_root[MODEL_NEVENT], g_end_now[MODEL_NEVENT], first = t_hi;
+            memcpy(g_end_now, g_hi, sizeof g_end_now);
+            for (int k = 0; k < r->nevents; ++k) t_root[k] = INFINITY;
+            /* each pass looks at the interval's end as the roots found so far have cut it: an
+             * event back on its old side at t_hi may have crossed and come back before a root
+             * (the yield of a grazing impact, crossed up and down about the maximum compression
+             * that ends the step) */
+            for (int located = 0;;) {
+                const double end = first;
+                const int before = located;
                 for (int k = 0; k < r->nevents; ++k) {
-                    if (t_root[k] < INFINITY || !crossed(r, k, g_first[k])) continue;
-                    const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;
-                    t_root[k] = locate(r, k, t_lo, lo, first, g_first[k], tol);
+                    if (t_root[k] < INFINITY || !crossed(r, k, g_end_now[k])) continue;
+                    const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
+                    t_root[k] = locate(r, k, t_lo, lo, end, g_end_now[k], tol);
                     first = fmin(first, t_root[k]);
-                    more = 1;
+                    ++located;
                 }
-                if (!more) break;
+                if (located == before || located == r->nevents || first == end) break;
+                double y_first[N];
+                ig_dopri5_interpolate(r, first, y_first);
+                watched(r, first, y_first, g_end_now);
             }
             for (int k = 0; k < r->nevents; ++k) roots_found[k] = t_root[k] <= first + tol;
             if (first < r->t) {

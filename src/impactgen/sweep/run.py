@@ -69,9 +69,10 @@ def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
     for key, value in summary.items():
         if key in ("switches", "stick_slip"):
             row[f"n_{key}"] = len(value)
-        elif key == "energy" or isinstance(value, list):
-            row.update(zip(_column_names(key, tuple(value) if key == "energy" else len(value)),
-                           value.values() if key == "energy" else value))
+        elif key == "energy":
+            row.update(zip(_column_names(key, tuple(value)), value.values()))
+        elif isinstance(value, list):
+            row.update(zip(_column_names(key, len(value)), value))
         else:
             row[key] = value
     return row
