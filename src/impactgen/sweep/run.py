@@ -18,7 +18,10 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
-from ..engines import simulate
+from .. import phases
+from ..build import CompiledModel, compile_model
+from ..codegen.expressions import ModelSpec
+from ..engines import model_spec
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
 from ..scene import Scene, scene_from_dict, scene_with
@@ -39,9 +42,10 @@ class CaseOptions:
     keep_trajectories: frozenset[int] = frozenset()  # case indices whose samples are kept
 
 
-def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
+def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False,
+             models: dict[ModelSpec, CompiledModel] | None = None) -> dict[str, Any]:
     """One case of the scene `base`: its varied inputs, every scalar summary field, status,
-    message, warnings, time."""
+    message, warnings, time. `models` keeps the compiled models a chunk has looked up."""
     started = time.perf_counter()
     row: dict[str, Any] = {"case": index, **overrides}
     try:
@@ -51,7 +55,7 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
                    wall_s=time.perf_counter() - started)
         return row
     try:
-        result = simulate(scene, record_steps=keep_trajectory)  # the summaries need no steps
+        result = _simulated(scene, keep_trajectory, {} if models is None else models)
     except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
         row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
         return row
@@ -63,19 +67,35 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
     return row
 
 
+def _simulated(scene: Scene, record_steps: bool, models: dict[ModelSpec, CompiledModel]):
+    """`simulate(scene, record_steps=...)` as a sweep runs it: every setting is the scene's
+    own, so the front door's option checks have nothing to do, and the model is looked up
+    once per chunk (the build cache's lookup reads the environment each time)."""
+    spec = model_spec(scene)
+    model = models.get(spec)
+    if model is None:
+        model = models[spec] = compile_model(spec)
+    return phases.run(model, scene, record_steps=record_steps)  # the summaries need no steps
+
+
 def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
     """The summary's scalars as columns: u_final[1].., q_final[1].., W_normal, ..."""
     row: dict[str, Any] = {}
     for key, value in summary.items():
-        if key in ("switches", "stick_slip"):
-            row[f"n_{key}"] = len(value)
-        elif key == "energy":
+        kind = type(value)  # exact types: this runs once per case
+        if kind is list:
+            if key in COUNTED:
+                row[f"n_{key}"] = len(value)
+            else:
+                row.update(zip(_column_names(key, len(value)), value))
+        elif kind is dict:
             row.update(zip(_column_names(key, tuple(value)), value.values()))
-        elif isinstance(value, list):
-            row.update(zip(_column_names(key, len(value)), value))
         else:
             row[key] = value
     return row
+
+
+COUNTED = frozenset({"switches", "stick_slip"})  # summary lists given as their count, n_switches, ...
 
 
 @lru_cache(maxsize=256)
@@ -89,36 +109,61 @@ def _column_names(key: str, items: tuple[str, ...] | int) -> tuple[str, ...]:
 
 @dataclass
 class ChunkRows:
-    """The rows of a chunk as columns (one list per column, None where a row has no value),
-    and the trajectories kept: what a worker sends back. Columns cost the driver, which
-    shares the cores with the workers, one conversion per column instead of one per value."""
+    """The rows of a chunk as columns, and the trajectories kept: what a worker sends back.
+    Columns cost the driver, which shares the cores with the workers, one conversion per
+    column instead of one per value, and a column of plain numbers comes as an array: one
+    buffer to unpickle and to hand to pandas."""
 
-    columns: dict[str, list[Any]]
+    columns: dict[str, np.ndarray | list[Any]]
     trajectories: dict[int, dict[str, tuple[np.ndarray, str]]]
 
     @classmethod
     def from_rows(cls, rows: list[dict[str, Any]]) -> "ChunkRows":
         kept = {row["case"]: row.pop(TRAJECTORY) for row in rows if TRAJECTORY in row}
-        names = dict.fromkeys(name for row in rows for name in row)  # first-seen order
-        return cls({name: [row.get(name) for row in rows] for name in names}, kept)
+        names: dict[str, Any] = {}
+        for row in rows:
+            names.update(row)
+        order = list(names)  # every column, in first-seen order
+        if all(list(row) == order for row in rows):  # the usual chunk: the same columns in each row
+            columns = dict(zip(order, map(list, zip(*(row.values() for row in rows)))))
+        else:  # None where a row has no value
+            columns = {name: [row.get(name) for row in rows] for name in order}
+        return cls({name: _packed(values) for name, values in columns.items()}, kept)
 
     def __len__(self) -> int:
         return len(self.columns.get("case", ()))
 
-    def extend(self, other: "ChunkRows") -> None:
-        """Append the rows of `other` (a column one of them lacks is None there)."""
-        n, m = len(self), len(other)
-        for name in other.columns:
-            if name not in self.columns:  # in the order the columns come
-                self.columns[name] = [None] * n
-        for name, values in self.columns.items():
-            values.extend(other.columns.get(name, [None] * m))
+    @staticmethod
+    def joined(parts: list["ChunkRows"]) -> dict[str, np.ndarray | list[Any]]:
+        """The columns of `parts` end to end (None where a part lacks a column)."""
+        out: dict[str, np.ndarray | list[Any]] = {}
+        for name in dict.fromkeys(name for part in parts for name in part.columns):
+            pieces = [part.columns.get(name) for part in parts]
+            if all(isinstance(p, np.ndarray) for p in pieces) and len({p.dtype for p in pieces}) == 1:
+                out[name] = np.concatenate(pieces)
+            else:
+                out[name] = [v for part, p in zip(parts, pieces)
+                             for v in (p.tolist() if isinstance(p, np.ndarray) else p if p is not None
+                                       else [None] * len(part))]
+        return out
+
+
+NUMBER_TYPES = (float, int, np.float64, np.int64)  # column values sent as an array (bool is not int here)
+
+
+def _packed(values: list[Any]) -> np.ndarray | list[Any]:
+    """A column of one plain number type as an array; anything else (text, None) as it is."""
+    kind = type(values[0]) if values else None
+    if kind in NUMBER_TYPES and all(type(v) is kind for v in values):
+        return np.array(values, dtype=kind)
+    return values
 
 
 def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> ChunkRows:
     """The rows of some cases of one scene (what a worker process or Dask task runs)."""
     base = scene_from_dict(scene_dict)
-    return ChunkRows.from_rows([case_row(base, index, overrides, index in options.keep_trajectories)
+    models: dict[ModelSpec, CompiledModel] = {}
+    return ChunkRows.from_rows([case_row(base, index, overrides, index in options.keep_trajectories, models)
                                 for index, overrides in cases])
 
 
@@ -228,17 +273,17 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
         if progress and finished:
             progress(len(finished))
         todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in finished]
-        rows = ChunkRows({}, {})  # every new row, made a DataFrame once at the end
+        parts: list[ChunkRows] = []  # every new row, made a DataFrame once at the end
         for done in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
             chunk = done if isinstance(done, ChunkRows) else ChunkRows.from_rows(done)  # lost rows come as rows
             if folder:
                 for case, kept in chunk.trajectories.items():
                     folder.write_trajectory(case, kept)
                 folder.write_part(chunk)
-            rows.extend(chunk)
+            parts.append(chunk)
             if progress:
                 progress(len(chunk))
-        frame = _table(frames + [pd.DataFrame(rows.columns)] if len(rows) else frames, spec)
+        frame = _table(frames + [pd.DataFrame(ChunkRows.joined(parts))] if parts else frames, spec)
         if folder:
             folder.write_result(frame)
         return frame
@@ -290,6 +335,9 @@ def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: i
 
 
 def _load_model(scene: Scene) -> None:
-    from ..build import compile_model
-    from ..engines import model_spec
+    """Load what every case uses before the workers fork: the compiled model, and the contact
+    laws the validity warnings evaluate (lambdified from sympy on first use, which took each
+    worker about 50 ms, as long as 700 cases of the paper's scene)."""
+    from ..laws import contact_constants
     compile_model(model_spec(scene))
+    contact_constants(scene)
