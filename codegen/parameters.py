@@ -45,6 +45,12 @@ class Parameter:
             return [(self.name, self.key, 0)]
         return [(f"{self.name}{i}", self.key.format(i=i), i - 1) for i in range(1, links + 1)]
 
+    def admits(self, value: float) -> bool:
+        """Whether `value` lies in the row's physical range."""
+        above = value > self.low if self.low_open else value >= self.low
+        below = value < self.high if self.high_open else value <= self.high
+        return above and below
+
     def range_text(self) -> str:
         if self.low == -INF and self.high == INF:
             return ""

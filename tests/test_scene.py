@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
@@ -140,3 +141,25 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
                 except SceneError as exc:
                     outcomes.append(str(exc))
             assert outcomes[0] == outcomes[1], overrides
+
+
+def test_the_scene_refuses_a_parameter_exactly_where_its_table_range_ends():
+    """One statement of each physical range (the parameter table): the scene checks it, as
+    the generated C checks it when an FMU importer sets the parameter."""
+    from impactgen.codegen.parameters import PARAMETERS
+    from impactgen.scene import check_value
+    ranged = [p for p in PARAMETERS if p.kind == "input" and p.range_text() and "." in p.key
+              and p.key != "surface.height_initial"]
+    assert {p.key for p in ranged} >= {"rod.nu", "chain.mass[{i}]", "contact.friction", "contact.friction_eps"}
+    for row in ranged:
+        key = row.key.format(i=1)
+        for end, is_open in ((row.low, row.low_open), (row.high, row.high_open)):
+            if not math.isfinite(end):
+                continue
+            for value in (end, math.nextafter(end, -math.inf), math.nextafter(end, math.inf)):
+                if row.admits(value):
+                    assert check_value(key, value, 2) == value
+                else:
+                    with pytest.raises(SceneError, match=re.escape(row.range_text())):
+                        check_value(key, value, 2)
+            assert row.admits(end) is not is_open

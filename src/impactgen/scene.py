@@ -21,6 +21,7 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - exercised on 3.10 only
     import tomli as tomllib  # type: ignore[no-redef]
 
+from .codegen.parameters import PARAMETERS
 from .codegen.thresholds import THRESHOLD
 from .errors import SceneError
 
@@ -174,12 +175,16 @@ def _positive(v: float) -> str | None:
     return None if v > 0 else "must be > 0"
 
 
-def _non_negative(v: float) -> str | None:
-    return None if v >= 0 else "must be >= 0"
+def _physical(key: str) -> Check:
+    """The check of a key that sets a model parameter: the range the parameter table states,
+    which the generated C checks as well (an FMU importer's fmi2SetReal)."""
+    row = next(p for p in PARAMETERS if p.key.replace("[{i}]", "") == key)
+    text = row.range_text()
+    reason = f"must lie in {text}" if text[0] in "([" else f"must be {text}"
 
-
-def _poisson(v: float) -> str | None:
-    return None if -1.0 < v < 0.5 else "Poisson ratio must lie in (-1, 0.5)"
+    def check(v: float) -> str | None:
+        return None if row.admits(v) else reason
+    return check
 
 
 def _tolerance(v: float) -> str | None:
@@ -201,28 +206,28 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "": {"name": Key("name", doc="letters, digits, '-' and '_'")},
     "chain": {
         "links": Key("int", check=lambda v: None if 1 <= v <= 60 else "must be between 1 and 60"),
-        "length": Key("floats", check=_positive, doc="m; one number or a list of n"),
-        "mass": Key("floats", check=_positive, doc="kg; one number or a list of n"),
-        "gravity": Key("float", 9.81, _non_negative, doc="m/s^2"),
+        "length": Key("floats", check=_physical("chain.length"), doc="m; one number or a list of n"),
+        "mass": Key("floats", check=_physical("chain.mass"), doc="kg; one number or a list of n"),
+        "gravity": Key("float", 9.81, _physical("chain.gravity"), doc="m/s^2"),
     },
     "rod": {
-        "E": Key("float", check=_positive, doc="Pa"),
-        "nu": Key("float", check=_poisson),
-        "yield_strength": Key("float", check=_positive, doc="Pa"),
-        "tip_radius": Key("float", check=_positive, doc="m"),
+        "E": Key("float", check=_physical("rod.E"), doc="Pa"),
+        "nu": Key("float", check=_physical("rod.nu")),
+        "yield_strength": Key("float", check=_physical("rod.yield_strength"), doc="Pa"),
+        "tip_radius": Key("float", check=_physical("rod.tip_radius"), doc="m"),
     },
     "surface": {
-        "E": Key("float", check=_positive, doc="Pa"),
-        "nu": Key("float", check=_poisson),
-        "yield_strength": Key("float", check=_positive, doc="Pa"),
+        "E": Key("float", check=_physical("surface.E"), doc="Pa"),
+        "nu": Key("float", check=_physical("surface.nu")),
+        "yield_strength": Key("float", check=_physical("surface.yield_strength"), doc="Pa"),
         "height": Key("height", "initial", doc='"initial" or a number in m'),
     },
     "contact": {
         "model": Key("str", "three-phase", choices=CONTACT_MODELS),
-        "friction": Key("float", check=_non_negative,
+        "friction": Key("float", check=_physical("contact.friction"),
                         doc="mu, the Coulomb coefficient; 0 for a frictionless surface"),
         "friction_mode": Key("str", "regularized", choices=FRICTION_MODES),
-        "friction_eps": Key("float", 1e-6, _positive, doc="m/s"),
+        "friction_eps": Key("float", 1e-6, _physical("contact.friction_eps"), doc="m/s"),
     },
     "initial": {
         "q_deg": Key("list", None, doc="degrees"),
