@@ -17,6 +17,7 @@ import numpy as np
 
 from .dense import DenseSolution
 from .scene import Scene
+from .validity import validity_warnings
 
 # The scalar outputs every model computes at each sample (T1..Tn, the kinetic energy per
 # link, come beside them), with their units.
@@ -302,7 +303,6 @@ class SimulationResult:
     @computed_once
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity (see validity.py)."""
-        from .validity import validity_warnings
         return validity_warnings(self.scene, self.impacts)
 
     def impacts_frame(self):

@@ -359,6 +359,7 @@ INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 
 @functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys for every case
+@functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys twice per case
 def split_key(dotted: str) -> tuple[str, str, int | None]:
     """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
     raise SceneError for a key the schema does not have."""
@@ -573,8 +574,15 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     scene = Scene(fields.get("name", base.name), chain, rod, fields.get("tip_radius", base.tip_radius), surface,
                   fields.get("surface_height", base.surface_height), contact, tuple(q0), tuple(u0), solver,
                   base.source)  # dataclasses.replace would take twice as long: this runs once per sweep case
-    _check_physics(scene)
+    if any(map(_read_by_physics_checks, overrides)):
+        _check_physics(scene)  # else the base passed them, and nothing they read has changed
     return scene
+
+
+def _read_by_physics_checks(dotted: str) -> bool:
+    """Whether `_check_physics` reads the key: the chain, the materials, the surface, the angles."""
+    section, key, _ = split_key(dotted)
+    return section in ("chain", "rod", "surface") or key in ("q", "q_deg")
 
 
 def joint_heights(scene: Scene) -> list[float]:
