@@ -12,7 +12,7 @@ import multiprocessing
 import signal
 import sys
 import threading
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Iterator
 
@@ -59,16 +59,14 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
             for chunk, tries in queue:
                 pending[pool.submit(run_chunk, payload, chunk, options)] = (chunk, tries)
                 sent += 1
-            while pending:
-                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    chunk, tries = pending.pop(future)
-                    try:
-                        rows = future.result()
-                    except BrokenProcessPool:
-                        retry.append((chunk, tries + 1))
-                        continue
-                    yield rows
+            for future in as_completed(list(pending)):  # one waiter for all (wait() installs one per call)
+                chunk, tries = pending.pop(future)
+                try:
+                    rows = future.result()
+                except BrokenProcessPool:
+                    retry.append((chunk, tries + 1))
+                    continue
+                yield rows
             finished_normally = True
         except BrokenProcessPool:  # submit, before any result was taken: a worker died already
             retry += [(chunk, tries + 1) for chunk, tries in pending.values()] + queue[sent:]
