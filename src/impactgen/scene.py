@@ -359,7 +359,6 @@ INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 
 @functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys for every case
-@functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys twice per case
 def split_key(dotted: str) -> tuple[str, str, int | None]:
     """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
     raise SceneError for a key the schema does not have."""
