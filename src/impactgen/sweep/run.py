@@ -18,10 +18,7 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
-from .. import phases
-from ..build import CompiledModel, compile_model
-from ..codegen.expressions import ModelSpec
-from ..engines import model_spec
+from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
 from ..scene import Scene, scene_from_dict, scene_with
@@ -42,10 +39,9 @@ class CaseOptions:
     keep_trajectories: frozenset[int] = frozenset()  # case indices whose samples are kept
 
 
-def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False,
-             models: dict[ModelSpec, CompiledModel] | None = None) -> dict[str, Any]:
+def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
     """One case of the scene `base`: its varied inputs, every scalar summary field, status,
-    message, warnings, time. `models` keeps the compiled models a chunk has looked up."""
+    message, warnings, time."""
     started = time.perf_counter()
     row: dict[str, Any] = {"case": index, **overrides}
     try:
@@ -55,7 +51,7 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
                    wall_s=time.perf_counter() - started)
         return row
     try:
-        result = _simulated(scene, keep_trajectory, {} if models is None else models)
+        result = simulate(scene, record_steps=keep_trajectory)  # the summaries need no steps
     except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
         row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
         return row
@@ -65,17 +61,6 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
     if keep_trajectory:
         row[TRAJECTORY] = trajectory_columns(result)  # with units
     return row
-
-
-def _simulated(scene: Scene, record_steps: bool, models: dict[ModelSpec, CompiledModel]):
-    """`simulate(scene, record_steps=...)` as a sweep runs it: every setting is the scene's
-    own, so the front door's option checks have nothing to do, and the model is looked up
-    once per chunk (the build cache's lookup reads the environment each time)."""
-    spec = model_spec(scene)
-    model = models.get(spec)
-    if model is None:
-        model = models[spec] = compile_model(spec)
-    return phases.run(model, scene, record_steps=record_steps)  # the summaries need no steps
 
 
 def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
@@ -162,8 +147,7 @@ def _packed(values: list[Any]) -> np.ndarray | list[Any]:
 def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> ChunkRows:
     """The rows of some cases of one scene (what a worker process or Dask task runs)."""
     base = scene_from_dict(scene_dict)
-    models: dict[ModelSpec, CompiledModel] = {}
-    return ChunkRows.from_rows([case_row(base, index, overrides, index in options.keep_trajectories, models)
+    return ChunkRows.from_rows([case_row(base, index, overrides, index in options.keep_trajectories)
                                 for index, overrides in cases])
 
 
@@ -338,6 +322,8 @@ def _load_model(scene: Scene) -> None:
     """Load what every case uses before the workers fork: the compiled model, and the contact
     laws the validity warnings evaluate (lambdified from sympy on first use, which took each
     worker about 50 ms, as long as 700 cases of the paper's scene)."""
+    from ..build import compile_model
+    from ..engines import model_spec
     from ..laws import contact_constants
     compile_model(model_spec(scene))
     contact_constants(scene)
