@@ -573,15 +573,8 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     scene = Scene(fields.get("name", base.name), chain, rod, fields.get("tip_radius", base.tip_radius), surface,
                   fields.get("surface_height", base.surface_height), contact, tuple(q0), tuple(u0), solver,
                   base.source)  # dataclasses.replace would take twice as long: this runs once per sweep case
-    if any(map(_read_by_physics_checks, overrides)):
-        _check_physics(scene)  # else the base passed them, and nothing they read has changed
+    _check_physics(scene)
     return scene
-
-
-def _read_by_physics_checks(dotted: str) -> bool:
-    """Whether `_check_physics` reads the key: the chain, the materials, the surface, the angles."""
-    section, key, _ = split_key(dotted)
-    return section in ("chain", "rod", "surface") or key in ("q", "q_deg")
 
 
 def joint_heights(scene: Scene) -> list[float]:
