@@ -105,15 +105,10 @@ class ChunkRows:
     @classmethod
     def from_rows(cls, rows: list[dict[str, Any]]) -> "ChunkRows":
         kept = {row["case"]: row.pop(TRAJECTORY) for row in rows if TRAJECTORY in row}
-        names: dict[str, Any] = {}
+        names: dict[str, Any] = {}  # every column, in first-seen order
         for row in rows:
             names.update(row)
-        order = list(names)  # every column, in first-seen order
-        if all(list(row) == order for row in rows):  # the usual chunk: the same columns in each row
-            columns = dict(zip(order, map(list, zip(*(row.values() for row in rows)))))
-        else:  # None where a row has no value
-            columns = {name: [row.get(name) for row in rows] for name in order}
-        return cls({name: _packed(values) for name, values in columns.items()}, kept)
+        return cls({name: _packed([row.get(name) for row in rows]) for name in names}, kept)  # None: no value
 
     def __len__(self) -> int:
         return len(self.columns.get("case", ()))
@@ -127,10 +122,15 @@ class ChunkRows:
             if all(isinstance(p, np.ndarray) for p in pieces) and len({p.dtype for p in pieces}) == 1:
                 out[name] = np.concatenate(pieces)
             else:
-                out[name] = [v for part, p in zip(parts, pieces)
-                             for v in (p.tolist() if isinstance(p, np.ndarray) else p if p is not None
-                                       else [None] * len(part))]
+                out[name] = [v for part, p in zip(parts, pieces) for v in _as_list(p, len(part))]
         return out
+
+
+def _as_list(column: np.ndarray | list[Any] | None, rows: int) -> list[Any]:
+    """A chunk's column as plain values, or None for each of its rows if it has no such column."""
+    if column is None:
+        return [None] * rows
+    return column.tolist() if isinstance(column, np.ndarray) else column
 
 
 NUMBER_TYPES = (float, int, np.float64, np.int64)  # column values sent as an array (bool is not int here)
