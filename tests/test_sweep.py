@@ -44,6 +44,25 @@ def test_grid_and_random_rows_equal_single_simulations():
             assert row["energy.W_normal"] == single["energy"]["W_normal"]
 
 
+def test_a_sweep_freezes_the_callers_heap_only_while_it_runs():
+    """The heap is frozen for the collector during a sweep (its workers fork from it) and
+    handed back as it was: unfrozen, or frozen by the caller and left so."""
+    import gc
+    from impactgen.sweep.execute import frozen_heap
+    seen = []
+    impactgen.sweep("paper", vary={"initial.u[2]": [-0.3]}, workers=1,
+                    progress=lambda n: seen.append(gc.get_freeze_count()))
+    assert seen and seen[0] > 0 and gc.get_freeze_count() == 0 and gc.isenabled()
+    gc.freeze()
+    try:
+        frozen = gc.get_freeze_count()
+        with frozen_heap():
+            pass
+        assert gc.get_freeze_count() == frozen  # the caller's own freeze is kept
+    finally:
+        gc.unfreeze()
+
+
 def test_failing_and_invalid_cases_are_rows_and_the_sweep_finishes():
     # rod.E = 1e9 Pa is below the rod's yield strength (1.12e9 Pa): a non-physical combination
     table = impactgen.sweep("paper", vary={"solver.max_steps": [5, 500000], "rod.E": [210e9, 1e9]},

@@ -8,12 +8,14 @@ its workers ends as rows with status "failed", so no case is ever missing from t
 """
 from __future__ import annotations
 
+import gc
 import multiprocessing
 import signal
 import sys
 import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
 from ..errors import SceneError
@@ -26,6 +28,25 @@ ABANDON_JOIN_S = 5.0  # s to wait for each killed worker of a broken pool
 
 Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)
 RunChunk = Callable[[dict[str, Any], Chunk, Any], Any]  # the rows of a chunk, in the caller's form
+
+
+@contextmanager
+def frozen_heap() -> Iterator[None]:
+    """Leave the objects that exist before a sweep out of the garbage collector's passes
+    while it runs (gc.freeze, as the gc docs advise before fork). The caller's heap (pandas',
+    pyarrow's, the model's objects) is then not scanned again by a full collection that the
+    sweep's own allocations set off: in a fresh process the first 20000-case sweep spent
+    about 0.1 s in one before its workers started. Forked workers inherit the frozen heap,
+    so their collections leave its pages shared. A caller that froze objects itself, or
+    turned the collector off, keeps its settings."""
+    if not gc.isenabled() or gc.get_freeze_count():
+        yield
+        return
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
 
 
 def chunked(cases: Chunk, workers: int) -> list[Chunk]:

@@ -237,12 +237,19 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
     `out/trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
     into `out` had finished (they are not run again).
     """
-    import pandas as pd
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise SceneError("--workers", f"expected a number of worker processes >= 1, got {workers!r}")
     if scheduler not in (None, "local") and workers is not None:
         raise SceneError("--workers", "a Dask cluster at an address has its own workers: give --workers "
                                       "only with no --scheduler or --scheduler local")
+    import pandas  # noqa: F401 - imported before the heap is frozen: its objects are most of it
+    with execute.frozen_heap():
+        return _run(scene, spec, workers, out, progress, scheduler, trajectories, on_resume)
+
+
+def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, progress: Progress | None,
+         scheduler: str | None, trajectories: int | Iterable[int], on_resume: Callable[[int], None] | None):
+    import pandas as pd
     cases = spec.cases()
     spec.check(scene, cases)
     keep = _kept_cases(trajectories, len(cases))
