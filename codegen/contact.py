@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import sympy as sm
 
+from .thresholds import THRESHOLD
+
 # Parameters of the contact, named as in the model documentation.
 delta = sm.Symbol("delta")  # penetration, positive into the surface
 E_star = sm.Symbol("E_star", positive=True)  # reduced modulus (Eq. 7)
@@ -22,7 +24,7 @@ eps = sm.Symbol("eps", positive=True)  # regularization speed of the friction si
 slip = sm.Symbol("slip")  # exact Coulomb: +1 or -1 while slipping, 0 while stuck (phase machine)
 v_Bx = sm.Symbol("v_Bx")  # tangential tip velocity
 
-YIELD_ONSET = sm.Rational(19, 10)  # phase I ends at delta = 1.9 delta_c
+YIELD_ONSET = sm.nsimplify(THRESHOLD["YIELD_ONSET"])  # phase I ends at delta = 19/10 delta_c, exactly
 
 
 def hertz_force(d: sm.Expr = delta, radius: sm.Expr = R) -> sm.Expr:

@@ -18,8 +18,9 @@ from sympy.printing.c import C99CodePrinter
 
 from . import contact as law
 from . import machine
-from .expressions import PHASES, ModelExpressions, ModelSpec, assemble_model
+from .expressions import ModelExpressions, assemble_model
 from .parameters import Field
+from .spec import PHASES, STATE_LAW, STATES, ModelSpec
 
 PHASE_CODES = {name: code for code, name in enumerate(PHASES)}
 
@@ -311,8 +312,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         outputs_kernel=_kernel(model, out_blocks), out_tip=out_tip, energies=energies,
         force_cases=force_cases, jac=jac,
         api_version=machine.API_VERSION, structure_hash=machine.structure_hash(model),
-        thresholds=machine.THRESHOLDS, all_states=machine.STATES,
-        state_laws=[(s, machine.STATE_LAW[s]) for s in machine.STATES if s in present],
+        thresholds=machine.THRESHOLDS, all_states=STATES,
+        state_laws=[(s, STATE_LAW[s]) for s in STATES if s in present],
         material_inputs=tuple(str(x) for x in law.MATERIAL_INPUTS), laws=machine.switch_laws(model, ccode),
         param_names=[f.name for f in params],
     )

@@ -8,8 +8,7 @@ there is no friction symbol anywhere, with the Hertz model no elasto-plastic law
 """
 from __future__ import annotations
 
-import json
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from functools import lru_cache
 
 import sympy as sm
@@ -17,62 +16,13 @@ import sympy as sm
 from . import contact as law
 from .mechanics import ChainEquations, chain_equations
 from .parameters import Field, fields
-
-# Phases of MODEL.md section 4, as the C enum values, and the sustained contact that ends a
-# chattering sequence of impacts (the tip held on the surface by a constraint force).
-PHASES = ("free", "elastic", "elastoplastic", "restitution", "sustained")
-FRICTION_KINDS = ("none", "regularized", "coulomb")
+from .spec import PHASES, ModelSpec
 
 y_s = sm.Symbol("y_s")  # surface height
 delta_m = sm.Symbol("delta_m", nonnegative=True)  # maximum compression so far
 # Tip quantities, computed first in every C function and named as in the equations.
 TIP = {name: sm.Symbol(name) for name in ("x_B", "y_B", "v_Bx", "v_By", "delta", "delta_rate")}
 TIP["delta"] = law.delta
-
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """What the generated C must be able to do; two scenes with equal specs share a build."""
-
-    links: int
-    contact_model: str = "three-phase"  # "three-phase" | "hertz"
-    friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip)
-    jacobian: bool = False  # emit the analytic Jacobian (for BDF)
-    sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
-
-    def __post_init__(self) -> None:
-        if self.links < 1:
-            raise ValueError("links must be >= 1")
-        if self.contact_model not in ("three-phase", "hertz"):
-            raise ValueError(f"unknown contact model {self.contact_model!r}")
-        if self.friction_law not in FRICTION_KINDS:
-            raise ValueError(f"unknown friction law {self.friction_law!r}")
-
-    @property
-    def has_friction(self) -> bool:
-        return self.friction_law != "none"
-
-    @property
-    def coulomb(self) -> bool:
-        return self.friction_law == "coulomb"
-
-    @property
-    def constrained(self) -> bool:
-        """Whether some phase holds a tip velocity by a constraint force (stick, sustained)."""
-        return self.coulomb or self.sustained
-
-    @property
-    def plastic(self) -> bool:
-        return self.contact_model == "three-phase"
-
-    @property
-    def slug(self) -> str:
-        """A short readable name, e.g. 'chain2-three-phase-regularized'."""
-        return (f"chain{self.links}-{self.contact_model}-{self.friction_law}"
-                + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else ""))
-
-    def to_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True)
 
 
 @dataclass(frozen=True)

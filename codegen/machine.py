@@ -17,16 +17,10 @@ import sympy as sm
 
 from . import contact as law
 from .expressions import ModelExpressions
+from .spec import STATES
 from .thresholds import THRESHOLD, THRESHOLDS  # noqa: F401 (the machine prints them)
 
 API_VERSION = 1  # the C API of model.h and model_machine.h: bumped when a signature changes
-
-# Machine states: contact phases, plus reloading (restitution's law, watching delta_m).
-STATES = ("free", "elastic", "elastoplastic", "restitution", "reloading", "sustained")
-STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplastic",
-             "restitution": "restitution", "reloading": "restitution", "sustained": "sustained"}
-
-
 
 
 @dataclass(frozen=True)
@@ -37,20 +31,18 @@ class SwitchLaws:
     residual: str | None  # delta_r from delta_max (Eq. 12), three-phase only
     unloading_radius: str | None  # R_res from delta_max, P_m, delta_r
     yielded: str | None  # reloading past delta_m returns to the elasto-plastic law
-    yield_onset: str | None
 
 
 def switch_laws(model: ModelExpressions, ccode) -> SwitchLaws:
     derive = tuple((str(name), ccode(expr)) for name, expr in law.material_constants())
     if not model.spec.plastic:
-        return SwitchLaws(derive, None, None, None, None)
+        return SwitchLaws(derive, None, None, None)
     delta_m = sm.Symbol("delta_m")
     return SwitchLaws(
         derive,
         residual=ccode(law.residual_deformation()),
         unloading_radius=ccode(law.unloading_radius()),
         yielded=ccode(sm.GreaterThan(delta_m, law.YIELD_ONSET * law.delta_c)),
-        yield_onset=ccode(law.YIELD_ONSET),
     )
 
 

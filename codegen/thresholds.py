@@ -32,6 +32,9 @@ THRESHOLDS = (
     Threshold("STICK_EXCESS", 1e-6,
               "a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event "
               "(judged at the end of each segment from every step: the machine's observer)"),
+    Threshold("YIELD_ONSET", 1.9,
+              "the Hertz law (phase I) holds up to this many critical deformations delta_c; the "
+              "Jackson-Green law (phase II, Eq. 10) beyond"),
     Threshold("ANGLE_ATOL_FLOOR", 1e-15,
               "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
 )

@@ -11,14 +11,14 @@ import pytest
 
 from impactgen import build
 from impactgen.build import compile_model
-from impactgen.codegen.expressions import ModelSpec
+from impactgen.codegen.spec import ModelSpec
 from impactgen.errors import BuildError
 
 SPEC = ModelSpec(1, "hertz", "none")
 
 
 def _compile_in_subprocess(cache: Path) -> subprocess.Popen:
-    code = ("from impactgen.build import compile_model; from impactgen.codegen.expressions import ModelSpec;"
+    code = ("from impactgen.build import compile_model; from impactgen.codegen.spec import ModelSpec;"
             "m = compile_model(ModelSpec(1, 'hertz', 'none')); print(m.path)")
     env = {**os.environ, "IMPACTGEN_CACHE_DIR": str(cache)}
     return subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE,
@@ -40,6 +40,21 @@ def test_a_new_process_loads_the_cache_without_rebuilding(tmp_path):
     out2, err2 = second.communicate(timeout=300)
     assert second.returncode == 0, err2
     assert Path(out2.strip()) == entry and library.stat().st_mtime_ns == stamp
+
+
+def test_a_built_model_runs_sweeps_and_warns_without_importing_the_generator():
+    """sympy (about 0.6 s to import) is for generating models: a process whose model is in the
+    cache simulates, reads the validity warnings and sweeps without it."""
+    import impactgen
+    impactgen.simulate(impactgen.load_scene("paper"))  # built into this session's cache
+    code = ("import sys, impactgen; scene = impactgen.load_scene('paper');"
+            "assert impactgen.simulate(scene).warnings == [];"
+            "table = impactgen.sweep(scene, vary={'rod.tip_radius': [1e-6]}, workers=1);"
+            "assert 'contact radius' in table['warnings'][0], table['warnings'][0];"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'sympy' or m.endswith('codegen.emit')))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "[]"
 
 
 def test_concurrent_builds_of_one_model_all_succeed(tmp_path):

@@ -12,7 +12,7 @@ import pytest
 import sympy as sm
 
 from impactgen.codegen.emit import driver_files, generate_model
-from impactgen.codegen.expressions import ModelSpec
+from impactgen.codegen.spec import ModelSpec
 from impactgen.codegen.mechanics import derive_chain
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from impactgen.build import compile_model
-from impactgen.codegen.expressions import ModelSpec
+from impactgen.codegen.spec import ModelSpec
 from impactgen.engines import model_spec
 from impactgen.laws import YIELD_ONSET, contact_constants, hertz_force, residual_deformation
 from impactgen.model_params import params_at_start

@@ -128,8 +128,15 @@ def test_results_outside_the_models_range_carry_warnings():
     # a soft, weak tip struck hard: deep in the plastic range, contact wider than the tip
     hard = impactgen.load_scene(PAPER, overrides={"initial.u": [-3.0, -6.0], "rod.tip_radius": 1e-4,
                                                   "rod.yield_strength": 2e8, "surface.yield_strength": 2e8})
-    warnings = impactgen.simulate(hard).warnings
+    result = impactgen.simulate(hard)
+    warnings = result.warnings
     assert any("contact radius" in w for w in warnings) and any("Jackson-Green fits" in w for w in warnings)
+    # the C model's derived constants (what the warnings read) and the laws' (from the scene) agree
+    from impactgen.validity import validity_warnings
+    assert validity_warnings(hard, result.impacts) == warnings
+    laws = contact_constants(hard)
+    for name in ("R", "delta_c", "B"):
+        assert getattr(result.contact, name) == pytest.approx(getattr(laws, name), rel=1e-14), name
 
 
 def test_chattering_impacts_carry_a_warning():

@@ -42,6 +42,7 @@ extern "C" {
 #define MODEL_CHATTER_RATIO 2.0  /* impacts chatter when a flight is shorter than this many contact times */
 #define MODEL_ANGLE_RESOLUTION 0.01  /* inside an impact the angles are resolved to this fraction of the expected penetration (over the chain's length) */
 #define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (judged at the end of each segment from every step: the machine's observer) */
+#define MODEL_YIELD_ONSET 1.9  /* the Hertz law (phase I) holds up to this many critical deformations delta_c; the Jackson-Green law (phase II, Eq. 10) beyond */
 #define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
 
 /* Machine states: the contact phases of MODEL section 4, plus reloading (restitution's force

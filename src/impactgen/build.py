@@ -13,6 +13,7 @@ import functools
 import fcntl
 import hashlib
 import importlib.machinery
+import importlib.metadata
 import importlib.resources
 import importlib.util
 import json
@@ -26,11 +27,11 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 import cffi
 
-from .codegen.emit import GeneratedModel, generate_model
-from .codegen.expressions import ModelSpec
+from .codegen.spec import ModelSpec
 from .errors import BuildError
 from .sundials import Sundials, find_sundials
 
@@ -39,6 +40,9 @@ SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,und
                  "-fno-sanitize-recover=undefined")
 GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "dopri5.c", "dopri5.h", "small_kernels.c", "small_kernels.h")
 MANIFEST = "manifest.json"
+
+if TYPE_CHECKING:  # the generator (sympy) is imported only to build a model, not to load one
+    from .codegen.emit import GeneratedModel
 
 
 @dataclass(frozen=True)
@@ -82,8 +86,7 @@ def _generator_fingerprint() -> str:
             if entry.name.endswith(pattern):
                 h.update(entry.name.encode())
                 h.update(entry.read_bytes())
-    import sympy
-    h.update(sympy.__version__.encode())
+    h.update(importlib.metadata.version("sympy").encode())  # read, not imported: a cached model needs no sympy
     return h.hexdigest()
 
 
@@ -208,6 +211,7 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
             shutil.rmtree(entry.with_name(entry.name + ".broken"), ignore_errors=True)
             with contextlib.suppress(OSError):
                 entry.rename(entry.with_name(entry.name + ".broken"))
+        from .codegen.emit import generate_model
         gen = generate_model(spec)
         work = Path(tempfile.mkdtemp(prefix=f"{key}.tmp-", dir=root))
         so = _compile(gen, sundials, module_name, work)

@@ -13,7 +13,7 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-from .codegen.expressions import PHASES
+from .codegen.spec import PHASES
 from .errors import SolverError
 from .results import SimulationResult
 from .scene import Scene, scene_from_dict, load_scene, steel_chain_scene

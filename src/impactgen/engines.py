@@ -12,7 +12,7 @@ import numpy as np
 
 from . import phases
 from .build import compile_model
-from .codegen.expressions import ModelSpec
+from .codegen.spec import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS

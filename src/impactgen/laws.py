@@ -1,8 +1,9 @@
 """Numbers from the contact laws' sympy expressions (codegen/contact.py) for Python code.
 
-The C model and its phase machine are printed from these expressions; the validity warnings,
-the benchmarks and the tests evaluate the very same expressions here (lambdified once), so no
-law is written twice. The reference engine keeps its own, independent statement of them.
+The C model and its phase machine are printed from these expressions; the benchmarks, the
+crosscheck and the tests evaluate the very same expressions here (lambdified once, on first
+use: sympy is imported then, not when impactgen is), so no law is written twice. The
+reference engine keeps its own, independent statement of them.
 """
 from __future__ import annotations
 
@@ -11,12 +12,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Callable
 
-import sympy as sm
-
-from .codegen import contact as law
+from .codegen.thresholds import THRESHOLD
 from .scene import Scene
 
-YIELD_ONSET = float(law.YIELD_ONSET)  # phase I ends at delta = 1.9 delta_c
+YIELD_ONSET = THRESHOLD["YIELD_ONSET"]  # phase I ends at delta = 1.9 delta_c
 
 
 @dataclass(frozen=True)
@@ -34,6 +33,9 @@ class ContactConstants:
 @lru_cache(maxsize=None)
 def _lambdified(name: str) -> Callable[..., float]:
     """One law as a Python function of plain floats."""
+    import sympy as sm
+
+    from .codegen import contact as law
     steps = law.material_constants()
     if name == "constants":
         values = {}

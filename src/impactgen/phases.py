@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from .build import CompiledModel
-from .codegen.machine import STATES
+from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
@@ -94,7 +94,8 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         session.close(scene)
     stats.update(segments=len(spans), samples=len(ran.t), wall_s=time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
-    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol)
+    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol,
+                            params if model.spec.plastic else None)  # its derived R, delta_c, B
 
 
 def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments: list[Segment],

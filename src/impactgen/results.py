@@ -206,6 +206,7 @@ class SimulationResult:
     stats: dict[str, Any]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
+    contact: Any = None  # the contact constants the engine ran with (R, delta_c, B, ...), for `warnings`
 
     def __post_init__(self) -> None:
         _fill_impact_energies(self.trajectory, self.n, self.impacts)
@@ -303,7 +304,7 @@ class SimulationResult:
     @computed_once
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity (see validity.py)."""
-        return validity_warnings(self.scene, self.impacts)
+        return validity_warnings(self.scene, self.impacts, self.contact)
 
     def impacts_frame(self):
         """The impacts as a pandas DataFrame, one row per impact (units in `IMPACT_UNITS`).

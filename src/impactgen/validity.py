@@ -45,8 +45,10 @@ def chattering_warning(impacts) -> list[str]:
 RESOLUTION_MARGIN = 100.0  # delta_max should exceed the tip's positional resolution this much
 
 
-def validity_warnings(scene: Scene, impacts) -> list[str]:
-    """One warning per kind of trouble, naming the impacts it concerns."""
+def validity_warnings(scene: Scene, impacts, contact=None) -> list[str]:
+    """One warning per kind of trouble, naming the impacts it concerns. `contact`: the
+    constants R, delta_c and B the engine ran with (the C model derives them from the same
+    expressions); without them they are computed from the scene (which imports sympy)."""
     # with sustained contact the phase machine rests the tip instead: the phases say so
     chatter = [] if scene.solver.t_end is not None and scene.solver.sustained_contact else chattering_warning(impacts)
     found: dict[str, list[tuple[int, str]]] = {}
@@ -59,7 +61,7 @@ def validity_warnings(scene: Scene, impacts) -> list[str]:
                     "only to about (resolution / delta_max)^2 of T0; tighten solver.rtol"))
     if scene.contact.model != "three-phase" or not impacts:
         return _grouped(found, len(impacts)) + chatter
-    c = contact_constants(scene)
+    c = contact if contact is not None else contact_constants(scene)
     for k, impact in enumerate(impacts, start=1):
         w = impact.delta_max / c.delta_c
         if impact.delta_max >= YIELD_ONSET * c.delta_c:

@@ -23,8 +23,8 @@ import numpy as np
 
 from .. import reference
 from ..build import compile_model
-from ..codegen.expressions import PHASES
-from ..codegen.machine import STATE_LAW
+from ..codegen.spec import PHASES
+from ..codegen.spec import STATE_LAW
 from ..engines import model_spec, simulate
 from ..model_params import params_at_start
 from ..reference import ReferenceModel, Segment

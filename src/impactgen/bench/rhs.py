@@ -15,7 +15,7 @@ import numpy as np
 
 from ..build import compile_model
 from ..codegen.emit import generate_model
-from ..codegen.expressions import ModelSpec
+from ..codegen.spec import ModelSpec
 from ..model_params import params_at_start
 from ..reference import ReferenceModel
 from ..scene import steel_chain_scene

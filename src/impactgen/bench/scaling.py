@@ -11,7 +11,7 @@ import time
 
 from .. import build
 from ..codegen import emit, expressions, mechanics
-from ..codegen.expressions import ModelSpec
+from ..codegen.spec import ModelSpec
 
 
 def _clear_caches() -> None:

@@ -24,7 +24,8 @@ from pathlib import Path
 from .. import __version__
 from ..build import GLUE_FILES, _native
 from ..codegen.emit import _c_double, _templates, _tidy, driver_files, generate_model
-from ..codegen.expressions import ModelSpec, assemble_model
+from ..codegen.expressions import assemble_model
+from ..codegen.spec import ModelSpec
 from ..engines import model_spec
 from ..errors import BuildError, SceneError
 from ..scene import Scene

@@ -326,11 +326,8 @@ def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: i
 
 
 def _load_model(scene: Scene) -> None:
-    """Load what every case uses before the workers fork: the compiled model, and the contact
-    laws the validity warnings evaluate (lambdified from sympy on first use, which took each
-    worker about 50 ms, as long as 700 cases of the paper's scene)."""
+    """Load the compiled model every case uses before the workers fork: they inherit it
+    loaded, with no start-up cost each."""
     from ..build import compile_model
     from ..engines import model_spec
-    from ..laws import contact_constants
     compile_model(model_spec(scene))
-    contact_constants(scene)

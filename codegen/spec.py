@@ -1,0 +1,64 @@
+"""The structure of a generated model, and the names of its phases and machine states.
+
+No sympy here: the runtime (build cache lookup, the phase machine's wrapper) imports this at
+start-up, and a run whose model is already built never needs the generator.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+
+# Phases of MODEL.md section 4, as the C enum values, and the sustained contact that ends a
+# chattering sequence of impacts (the tip held on the surface by a constraint force).
+PHASES = ("free", "elastic", "elastoplastic", "restitution", "sustained")
+FRICTION_KINDS = ("none", "regularized", "coulomb")
+
+# Machine states: contact phases, plus reloading (restitution's law, watching delta_m).
+STATES = ("free", "elastic", "elastoplastic", "restitution", "reloading", "sustained")
+STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplastic",
+             "restitution": "restitution", "reloading": "restitution", "sustained": "sustained"}
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What the generated C must be able to do; two scenes with equal specs share a build."""
+
+    links: int
+    contact_model: str = "three-phase"  # "three-phase" | "hertz"
+    friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip)
+    jacobian: bool = False  # emit the analytic Jacobian (for BDF)
+    sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
+
+    def __post_init__(self) -> None:
+        if self.links < 1:
+            raise ValueError("links must be >= 1")
+        if self.contact_model not in ("three-phase", "hertz"):
+            raise ValueError(f"unknown contact model {self.contact_model!r}")
+        if self.friction_law not in FRICTION_KINDS:
+            raise ValueError(f"unknown friction law {self.friction_law!r}")
+
+    @property
+    def has_friction(self) -> bool:
+        return self.friction_law != "none"
+
+    @property
+    def coulomb(self) -> bool:
+        return self.friction_law == "coulomb"
+
+    @property
+    def constrained(self) -> bool:
+        """Whether some phase holds a tip velocity by a constraint force (stick, sustained)."""
+        return self.coulomb or self.sustained
+
+    @property
+    def plastic(self) -> bool:
+        return self.contact_model == "three-phase"
+
+    @property
+    def slug(self) -> str:
+        """A short readable name, e.g. 'chain2-three-phase-regularized'."""
+        return (f"chain{self.links}-{self.contact_model}-{self.friction_law}"
+                + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else ""))
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True)
