@@ -41,6 +41,16 @@ def test_summary_is_computed_once_with_plain_floats(paper_result):
     assert r.summary is r.first_impact  # a run to separation is its first impact
 
 
+def test_a_result_pickles_with_its_summary_and_warnings():
+    """A result crosses processes (a user's own pool): it holds plain data, no C objects."""
+    import pickle
+    hard = impactgen.load_scene(PAPER, overrides={"rod.tip_radius": 1e-6})
+    result = impactgen.simulate(hard)
+    again = pickle.loads(pickle.dumps(result))
+    assert again.summary == result.summary and again.warnings == result.warnings
+    assert any("contact radius" in w for w in again.warnings)
+
+
 def test_whole_run_budget_closes_and_reports_the_end_state(bouncing):
     s, first = bouncing.summary, bouncing.first_impact
     assert s["impacts"] == len(bouncing.impacts) > 100

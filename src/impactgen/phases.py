@@ -22,6 +22,7 @@ from .model_params import fill_params
 from .results import Columns, Impact, PhaseRuns, PhaseSpan, SimulationResult, Trajectory
 from .scene import Scene
 from .session import CvodeSession, MachineRun, Segment
+from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
@@ -94,8 +95,8 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         session.close(scene)
     stats.update(segments=len(spans), samples=len(ran.t), wall_s=time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
-    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol,
-                            params if model.spec.plastic else None)  # its derived R, delta_c, B
+    contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
+    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact)
 
 
 def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments: list[Segment],

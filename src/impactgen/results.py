@@ -17,7 +17,7 @@ import numpy as np
 
 from .dense import DenseSolution
 from .scene import Scene
-from .validity import validity_warnings
+from .validity import YieldScale, validity_warnings
 
 # The scalar outputs every model computes at each sample (T1..Tn, the kinetic energy per
 # link, come beside them), with their units.
@@ -206,7 +206,7 @@ class SimulationResult:
     stats: dict[str, Any]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
-    contact: Any = None  # the contact constants the engine ran with (R, delta_c, B, ...), for `warnings`
+    contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
 
     def __post_init__(self) -> None:
         _fill_impact_energies(self.trajectory, self.n, self.impacts)

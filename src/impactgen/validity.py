@@ -17,6 +17,7 @@ Checked per impact from what was recorded at maximum compression:
 """
 from __future__ import annotations
 
+from typing import NamedTuple
 
 from .codegen.thresholds import THRESHOLD
 from .laws import YIELD_ONSET, contact_constants, contact_radius
@@ -42,13 +43,23 @@ def chattering_warning(impacts) -> list[str]:
     return []
 
 
+class YieldScale(NamedTuple):
+    """What the checks read of a run's contact constants (`laws.ContactConstants` has them
+    too): the reduced radius R (m), the critical deformation delta_c (m) and the
+    Jackson-Green exponent B."""
+
+    R: float
+    delta_c: float
+    B: float
+
+
 RESOLUTION_MARGIN = 100.0  # delta_max should exceed the tip's positional resolution this much
 
 
-def validity_warnings(scene: Scene, impacts, contact=None) -> list[str]:
+def validity_warnings(scene: Scene, impacts, contact: YieldScale | None = None) -> list[str]:
     """One warning per kind of trouble, naming the impacts it concerns. `contact`: the
-    constants R, delta_c and B the engine ran with (the C model derives them from the same
-    expressions); without them they are computed from the scene (which imports sympy)."""
+    constants the engine ran with (the C model derives them from the same expressions);
+    without them they are computed from the scene (which imports sympy)."""
     # with sustained contact the phase machine rests the tip instead: the phases say so
     chatter = [] if scene.solver.t_end is not None and scene.solver.sustained_contact else chattering_warning(impacts)
     found: dict[str, list[tuple[int, str]]] = {}
