@@ -23,8 +23,8 @@ from ..errors import SceneError
 CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep overhead small
 MAX_CHUNK = 200  # cases: a lost chunk costs at most this much work again, and the last chunk to
 # finish keeps the other workers idle for at most this many cases
-MAX_TASK_CHUNK = 1000  # cases per Dask task: a task costs the cluster about 5 ms of CPU (500 tasks
-# of 200 cases doing nothing took 2.6 s on a LocalCluster of two workers), a pool chunk about 0.8 ms
+MAX_TASK_CHUNK = 1000  # cases per Dask task: a task costs the cluster about 5 ms (500 tasks of 200
+# cases doing nothing took 2.6 s on a LocalCluster of two workers), a pool's chunk about 0.8 ms
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
 ABANDON_JOIN_S = 5.0  # s to wait for each killed worker of a broken pool
 
@@ -37,7 +37,7 @@ def frozen_heap() -> Iterator[None]:
     """Leave the objects that exist before a sweep out of the garbage collector's passes
     while it runs (gc.freeze, as the gc docs advise before fork). The caller's heap (pandas',
     pyarrow's, the model's objects) is then not scanned again by a full collection that the
-    sweep's own allocations set off: in a fresh process the first 20000-case sweep spent
+    sweep's own allocations set off: in a warm process the first 20000-case sweep spent
     about 0.1 s in one before its workers started. Forked workers inherit the frozen heap,
     so their collections leave its pages shared. A caller that froze objects itself, or
     turned the collector off, keeps its settings."""
