@@ -28,81 +28,51 @@
 #define MAX_SEGMENTS 100000L  /* phase switches in one run: beyond this, stop rather than hang */
 
 typedef struct {
-    double t_start, t_end, delta_max, P_max, delta_r, R_res, T_before, T_after;
-} impact_record;
-
-static double output(const model_params *p, double t, const double *y, int which)
-{
-    double out[MODEL_NOUT];
-    model_outputs(t, y, out, p);
-    return out[which];
-}
-
-typedef struct {
     const char *status;
-    int impacts;
     double t;
-    double y[MODEL_NSTATE], y_start[MODEL_NSTATE];
-    impact_record first;
-} run_summary;
+    double y[MODEL_NSTATE];
+    ig_summary summary;  /* the run's (to a time) or its first impact's (to separation) */
+} run_result;
 
 /* One run of the scene from its start, on solver s (created, or reset, with the scene's
- * tolerances): the phase machine's loop in one call (ig_run), reading the first impact off
- * the segment records, as impactgen's Python wrapper does. Only segment ends are sampled. */
-static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_summary *r)
+ * tolerances): the phase machine's loop in one call (ig_run), its summary tallied on the
+ * way (ig_summarize), as impactgen's Python wrapper does. Only segment ends are sampled. */
+static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_result *r)
 {
-    static double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE], out_buf[CAPACITY * MODEL_NOUT];
-    static ig_segment segments[CAPACITY];
+    double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE], out_buf[CAPACITY * MODEL_NOUT];
+    ig_segment segments[CAPACITY];
+    ig_tally tally;
+    ig_summary run, first;
     model_params p = *inputs;
     double atol[MODEL_NSTATE];
     model_machine m;
-    memset(r, 0, sizeof *r);
     r->status = "ok";
+    r->t = 0.0;
     memcpy(r->y, y0, sizeof r->y);
     const int start = model_machine_start(&m, &p, r->t, r->y, MODEL_SCENE_RUN_TO_TIME);
+    ig_outputs(&p, 1, &r->t, r->y, out_buf);
+    ig_tally_begin(&tally, r->t, r->y, out_buf, start == MODEL_START_CONTACT);
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) {
         r->status = "no-impact";
+        ig_summarize(&tally, &r->summary, &first);
         return;
     }
     model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
     ig_solver_set_atol(s, atol);
-    if (start == MODEL_START_CONTACT) {
-        r->first.T_before = output(&p, r->t, r->y, MODEL_OUT_T);
-        memcpy(r->y_start, r->y, sizeof r->y);
-        r->impacts = 1;
-    }
     long begun = 0;
     for (;;) {
         int n = 0, n_segments = 0;
         const int flag = ig_run(s, &m, &p, &r->t, r->y, MODEL_SCENE_T_END, MODEL_SCENE_ATOL, MAX_SEGMENTS - begun,
-                                0, t_buf, y_buf, out_buf, NULL, CAPACITY, &n, segments, CAPACITY, &n_segments);
+                                0, t_buf, y_buf, out_buf, NULL, CAPACITY, &n, segments, CAPACITY, &n_segments, &tally);
         begun += n_segments;
-        for (int k = 0; k < n_segments; ++k) {
-            const ig_segment *seg = &segments[k];
-            const double *y = y_buf + (size_t)seg->sample * MODEL_NSTATE;
-            const double T = out_buf[(size_t)seg->sample * MODEL_NOUT + MODEL_OUT_T];
-            if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && ++r->impacts == 1) {
-                r->first.t_start = seg->t;
-                r->first.T_before = T;
-                memcpy(r->y_start, y, sizeof r->y_start);
-            }
-            if ((seg->act & MODEL_ACT_MAX_COMPRESSION) && r->impacts == 1) {
-                r->first.delta_max = seg->delta_max;
-                r->first.P_max = seg->P_max;
-                r->first.delta_r = seg->delta_r;
-                r->first.R_res = seg->R_res;
-            }
-            if ((seg->act & MODEL_ACT_IMPACT_END) && r->impacts == 1) {
-                r->first.t_end = seg->t;
-                r->first.T_after = T;
-            }
-        }
         if (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL) continue;
         if (flag < 0) {
             fprintf(stderr, "CVODE failed in %s at t = %g: %s\n", model_machine_state_name(m.state), r->t,
                     ig_solver_message(s));
             r->status = "failed";
         }
+        ig_summarize(&tally, &run, &first);
+        r->summary = MODEL_SCENE_RUN_TO_TIME || flag < 0 ? run : first;
         return;
     }
 }
@@ -127,7 +97,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "cannot create CVODE: %s\n", err);
         return 4;
     }
-    run_summary r;
+    run_result r;
     run_scene(s, &p, y0, &r);
     ig_stats stats;
     ig_solver_stats(s, &stats);
@@ -141,22 +111,23 @@ int main(int argc, char **argv)
         clock_gettime(CLOCK_MONOTONIC, &b);
         printf("ms_per_run %.6f\n", ((b.tv_sec - a.tv_sec) * 1e3 + (b.tv_nsec - a.tv_nsec) * 1e-6) / (double)repeat);
     }
-    const impact_record first = r.first;
+    const ig_summary *sum = &r.summary;
     printf("scene %s\n", MODEL_SCENE_NAME);
     printf("status %s\n", r.status);
-    printf("impacts %d\n", r.impacts);
-    printf("t_final %.17g\n", r.t);
-    printf("T0 %.17g\n", first.T_before);
-    printf("Tf %.17g\n", first.T_after);
-    printf("delta_max %.17g\n", first.delta_max);
-    printf("delta_r %.17g\n", first.delta_r);
-    printf("P_max %.17g\n", first.P_max);
-    printf("R_res %.17g\n", first.R_res);
-    printf("t_contact %.17g\n", first.t_end - first.t_start);
-    for (int i = 0; i < MODEL_NQ; ++i) printf("q_final[%d] %.17g\n", i + 1, r.y[i]);
-    for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, r.y[MODEL_NQ + i]);
-    printf("W_normal %.17g\n", r.y[2 * MODEL_NQ] - r.y_start[2 * MODEL_NQ]);
-    if (MODEL_NSTATE > 2 * MODEL_NQ + 1) printf("W_friction %.17g\n", r.y[MODEL_NSTATE - 1] - r.y_start[MODEL_NSTATE - 1]);
+    printf("impacts %d\n", sum->impacts);
+    printf("t_final %.17g\n", sum->t_final);
+    printf("T0 %.17g\n", sum->T0);
+    printf("Tf %.17g\n", sum->Tf);
+    printf("delta_max %.17g\n", sum->delta_max);
+    printf("delta_r %.17g\n", sum->delta_r);
+    printf("P_max %.17g\n", sum->P_max);
+    printf("R_res %.17g\n", sum->R_res);
+    printf("t_contact %.17g\n", sum->t_contact);
+    for (int i = 0; i < MODEL_NQ; ++i) printf("q_final[%d] %.17g\n", i + 1, sum->y_final[i]);
+    for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, sum->y_final[MODEL_NQ + i]);
+    printf("W_normal %.17g\n", sum->W_normal);
+    if (MODEL_NSTATE > 2 * MODEL_NQ + 1) printf("W_friction %.17g\n", sum->W_friction);
+    printf("W_gravity %.17g\n", sum->W_gravity);
     printf("steps %ld\n", stats.nsteps);
     ig_solver_free(s);
     return strcmp(r.status, "ok") == 0 || strcmp(r.status, "no-impact") == 0 ? 0 : 4;

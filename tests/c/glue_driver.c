@@ -138,6 +138,7 @@ int main(void)
      * buffers small enough that both resume many times, end in the same state */
     double t_end_of[2], y_end_of[2][MODEL_NSTATE];
     int segments_of[2] = {0, 0};
+    ig_summary run_of[2], first_of[2];
     const int methods[3] = {IG_METHOD_BDF, IG_METHOD_DOPRI5, IG_METHOD_AUTO};
     for (int which = 0; which < 3; ++which)
     for (int every = 0; every <= 1; ++every) {
@@ -146,24 +147,35 @@ int main(void)
         ig_segment segs[1];
         double t = 0.0, y[MODEL_NSTATE];
         int n_seg = 0;
+        ig_tally tally;
         s = paper_run(methods[which], &q, &m, y, atol);
         EXPECT(s != NULL, "solver for ig_run created");
-        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg)
-               == IG_ERR_USAGE && ig_solver_message(s)[0], "ig_run without room for a sample refused");
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg,
+                      NULL) == IG_ERR_USAGE && ig_solver_message(s)[0], "ig_run without room for a sample refused");
+        ig_outputs(&q, 1, &t, y, out);
+        ig_tally_begin(&tally, t, y, out, m.impacts > 0);
         do {
             flag = ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, every ? 7 : 1, &n,
-                          segs, 1, &n_seg);
+                          segs, 1, &n_seg, &tally);
             segments_of[every] += n_seg;
             EXPECT(n_seg == 0 || segs[0].t == t_buf[segs[0].sample], "a segment's end is its last sample");
         } while (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL);
         EXPECT(flag == IG_RUN_DONE, "ig_run runs to separation");
         t_end_of[every] = t;
         memcpy(y_end_of[every], y, sizeof y);
+        ig_summarize(&tally, &run_of[every], &first_of[every]);
+        EXPECT(first_of[every].impacts == 1 && first_of[every].n_switches == 3 && first_of[every].delta_r > 0.0
+               && first_of[every].t_final == t && first_of[every].t_contact > 0.0 && isnan(first_of[every].t_sustained),
+               "the tally follows the impact across resumed calls");
+        EXPECT(fabs(first_of[every].residual) < 1e-6 * first_of[every].T0, "the impact's energy budget closes");
         ig_solver_free(s);
         if (every == 1) {
             EXPECT(segments_of[0] == 3 && segments_of[1] == 3, "three phases: elastic, elasto-plastic, restitution");
             EXPECT(t_end_of[0] == t_end_of[1] && memcmp(y_end_of[0], y_end_of[1], sizeof y_end_of[0]) == 0,
                    "summary-only and every-step runs take the same steps");
+            EXPECT(memcmp(&first_of[0], &first_of[1], sizeof first_of[0]) == 0
+                   && memcmp(&run_of[0], &first_of[0], sizeof run_of[0]) == 0,
+                   "both give the same summary, the run's that of its one impact");
             segments_of[0] = segments_of[1] = 0;
         }
     }
@@ -174,7 +186,7 @@ int main(void)
         double t = 0.0, y[MODEL_NSTATE];
         int n_seg = 0;
         s = paper_run(IG_METHOD_BDF, &q, &m, y, atol);
-        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 1, 0, t_buf, y_buf, out, NULL, 7, &n, segs, 4, &n_seg)
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 1, 0, t_buf, y_buf, out, NULL, 7, &n, segs, 4, &n_seg, NULL)
                == IG_ERR_SEGMENTS && n_seg == 1, "ig_run stops at max_segments");
         ig_solver_free(s);
     }

@@ -124,6 +124,53 @@ typedef struct {
     model_params params; /* the parameters during the segment */
 } ig_segment;
 
+/* The values at one sample that a summary reads: time, kinetic and potential energy, the
+ * works of the contact forces (W_friction 0 without friction) and the state. */
+typedef struct {
+    double t, T, V, W_normal, W_friction;
+    double y[MODEL_NSTATE];
+} ig_point;
+
+/* What a run keeps for its summaries while ig_run goes from segment to segment (over all
+ * its calls): begun by ig_tally_begin at the run's first sample, read by ig_summarize. */
+typedef struct {
+    ig_point start, last;             /* the run's first sample and its latest */
+    ig_point first_begin, first_end;  /* the first impact's first and last samples */
+    int impacts;                      /* impacts begun */
+    int first_switches;               /* phase switches within the first impact */
+    int first_stick_slip;             /* stick-slip changes within it (exact Coulomb) */
+    int ended;                        /* impacts ended */
+    double now_start;                 /* the latest impact's start, s */
+    double now_delta_max, now_P_max, now_delta_r, now_R_res;      /* its record at maximum compression */
+    double first_delta_max, first_P_max, first_delta_r, first_R_res;  /* the first impact's */
+    double delta_max, P_max, deepest_delta_r, deepest_R_res;  /* over the ended impacts: the
+                                                                 largest, and the deepest dent's */
+    double t_contact;                 /* contact time of the ended impacts, s */
+    double segment_start;             /* when the current segment began, s */
+    double t_sustained;               /* when sustained contact first began, s; NAN if never */
+} ig_tally;
+
+/* A run's summary (MODEL section 6), over the whole run or over its first impact: energies
+ * at its two ends and the works between them, the impact record (the largest values, and the
+ * deepest dent's delta_r and R_res), the contact time, the state at its end. NAN where there
+ * is nothing to report: t_impact without an impact, t_sustained without sustained contact. */
+typedef struct {
+    double T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final;
+    double W_normal, W_friction, W_gravity, residual;
+    int n_switches, n_stick_slip;     /* the first impact's phase switches and stick-slip changes */
+    int impacts;                      /* in the whole run */
+    double y_final[MODEL_NSTATE];     /* the state at its end */
+} ig_summary;
+
+/* Begin the tally of a run at its first sample (t0, y0, with its outputs out0); in_contact:
+ * the run starts with an impact (model_machine_start returned MODEL_START_CONTACT). */
+void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact);
+
+/* The two summaries of a tallied run: over the whole run (an impact still in contact counted
+ * to the run's last sample), and over its first impact (the whole run if it had none; an
+ * impact still in contact has no contact time). A run to separation reports the second. */
+void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impact);
+
 /* Run the phase machine m (started with model_machine_start) under p from (*t, y) to
  * t_stop: each segment integrated until one of the events the machine watches, the switch
  * there, the next segment, with the tolerances the machine asks for (atol: the scene's
@@ -134,11 +181,12 @@ typedef struct {
  * IG_RUN_DONE when the machine ends the run, IG_REACHED_END at t_stop, IG_BUFFER_FULL or
  * IG_SEGMENTS_FULL when capacity samples or segment_capacity segments are written (call
  * again with emptied buffers to continue), or < 0 on a failure (ig_solver_message says
- * why; the samples up to it are written). At most max_segments segments begin in one call. */
+ * why; the samples up to it are written). At most max_segments segments begin in one call.
+ * tally, if not NULL (begun with ig_tally_begin), follows the run for ig_summarize. */
 int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
            double atol, long max_segments, int every_step,
            double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
-           ig_segment *segments, int segment_capacity, int *n_segments);
+           ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally);
 
 /* Read the SUNDIALS version the glue was compiled against. */
 int ig_sundials_version_major(void);
