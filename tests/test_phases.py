@@ -172,3 +172,37 @@ def test_a_reused_integrator_gives_what_a_fresh_one_gives():
     assert np.array_equal(fresh.t, reused.t) and np.array_equal(fresh.y, reused.y)
     for key in ("nsteps", "nfev", "njev", "ngev", "segments"):
         assert fresh.stats[key] == reused.stats[key], key
+
+
+def _same(tallied, computed, where=""):
+    """Equal key by key, bit for bit (NaN nowhere: None stands for nothing)."""
+    if isinstance(tallied, dict):
+        assert list(tallied) == list(computed), where
+        for key in tallied:
+            _same(tallied[key], computed[key], f"{where}.{key}")
+    elif isinstance(tallied, list):
+        assert len(tallied) == len(computed), where
+        for k, (a, b) in enumerate(zip(tallied, computed)):
+            _same(a, b, f"{where}[{k}]")
+    else:
+        assert tallied == computed and type(tallied) is type(computed), (where, tallied, computed)
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("paper", {}), ("coulomb", {}), ("aluminium-on-steel", {"solver.t_end": 0.4}), ("bouncing", {}),
+    ("bouncing", {"solver.sustained_contact": False, "solver.t_end": 0.3}), ("coulomb", {"solver.t_end": 0.5}),
+    ("paper", {"solver.max_steps": 5}), ("paper", {"initial.u": [0.1, 0.2]}), ("paper", {"solver.t_max": 2e-4}),
+    ("paper", {"initial.u": [0.1, -0.1]}), ("paper", {"surface.height": -2.0, "solver.t_end": 1.0}),
+])
+def test_the_summaries_tallied_in_c_equal_those_computed_from_the_samples(name, overrides):
+    """The C engine tallies its summaries during the run (cvode_glue.c's ig_summarize); the
+    same summaries computed in Python from the run's samples and impacts (results.py, as the
+    reference engine's are) agree bit for bit: runs to separation and to a time, later
+    impacts, sustained contact, friction, a failure, no impact, a run ending in contact."""
+    from impactgen.results import _first_impact_summary, _run_summary
+    scene = impactgen.load_scene(name, overrides=overrides)
+    for record_steps in (True, False):
+        result = impactgen.simulate(scene, record_steps=record_steps)
+        assert result.tallied is not None
+        _same(result.first_impact, _first_impact_summary(result), "first_impact")
+        _same(result.summary, result.first_impact if result._to_separation() else _run_summary(result), "summary")

@@ -19,7 +19,7 @@ from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Columns, Impact, PhaseRuns, PhaseSpan, SimulationResult, Trajectory
+from .results import Columns, Impact, PhaseRuns, PhaseSpan, SimulationResult, Tallied, Trajectory
 from .scene import Scene
 from .session import CvodeSession, MachineRun, Segment
 from .validity import YieldScale
@@ -62,18 +62,18 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     start = lib.model_machine_start(m, params, 0.0, session.y0_c, int(run_to_time))
     state0 = m.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
-        first_row = session.outputs(params, np.array([0.0]), y[None, :])
+        first_row, tallied = session.without_run(params, 0.0)
         session.close(scene)
-        return _no_impact_at_start(scene, model, y.copy(), first_row[0].tolist(), start == lib.MODEL_START_ALONG,
-                                   started)
+        return _no_impact_at_start(scene, model, y.copy(), first_row.tolist(), start == lib.MODEL_START_ALONG,
+                                   started, tallied)
     lib.model_machine_atol(m, params, solver.rtol, solver.atol, session.atol_now)
     session.reset(scene)
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)
+    in_contact = start == lib.MODEL_START_CONTACT
     ran = session.run(params, 0.0, solver.t_end if run_to_time else solver.t_max, solver.atol, MAX_SEGMENTS,
-                      every_step=record_steps or polynomials, with_params=t_eval is not None)
-    spans, impacts = _spans_and_impacts(machine, model.event_names, ran.segments,
-                                        start == lib.MODEL_START_CONTACT)
+                      every_step=record_steps or polynomials, in_contact=in_contact, with_params=t_eval is not None)
+    spans, impacts = _spans_and_impacts(machine, model.event_names, ran.segments, in_contact)
     status, message = _status(lib, scene, machine, ran, impacts)
 
     # the samples: the start, then each segment's (after sample cuts[j] to sample
@@ -96,7 +96,8 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     stats.update(segments=len(spans), samples=len(ran.t), wall_s=time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
     contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
-    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact)
+    return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
+                            ran.summaries)
 
 
 def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments: list[Segment],
@@ -173,7 +174,7 @@ def _end_without_event(scene: Scene, impacts: list[Impact], phase: str) -> tuple
 
 
 def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: list[float],
-                        along: bool, started: float) -> SimulationResult:
+                        along: bool, started: float, tallied: tuple[Tallied, Tallied]) -> SimulationResult:
     rate0 = 0.0 if along else first[model.output_names.index("delta_rate")]
     motion = "along" if along else "away from"
     trajectory = Trajectory(np.array([0.0]), y[None, :], np.array(["free"]),
@@ -181,4 +182,5 @@ def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first
     return SimulationResult(scene, "c", "no-impact",
                             f"the tip touches the surface but moves {motion} it (d(delta)/dt = "
                             f"{rate0:.3g} m/s): no impact", trajectory, [], [],
-                            {"segments": 0, "samples": 1, "wall_s": time.perf_counter() - started})
+                            {"segments": 0, "samples": 1, "wall_s": time.perf_counter() - started},
+                            tallied=tallied)

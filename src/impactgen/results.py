@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -127,6 +127,32 @@ class Columns(Mapping):
         return len(self._index)
 
 
+class Tallied(NamedTuple):
+    """A summary as the C engine tallied it during the run (cvode_glue.h's ig_summary, field
+    for field): over the whole run, or over its first impact. NaN where there is nothing to
+    report (t_impact, t_sustained)."""
+
+    T0: float
+    Tf: float
+    delta_T: float
+    delta_max: float
+    delta_r: float
+    P_max: float
+    R_res: float
+    t_contact: float
+    t_impact: float
+    t_sustained: float
+    t_final: float
+    W_normal: float
+    W_friction: float
+    W_gravity: float
+    residual: float
+    n_switches: int
+    n_stick_slip: int
+    impacts: int
+    y_final: tuple[float, ...]  # q, u, then the works
+
+
 class computed_once:
     """functools.cached_property without the lock it takes on every first use before
     Python 3.12: a summary is read once per run, in the inner loop of a sweep."""
@@ -207,6 +233,7 @@ class SimulationResult:
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
+    tallied: tuple[Tallied, Tallied] | None = None  # the C engine's summaries (run, first impact)
 
     def __post_init__(self) -> None:
         _fill_impact_energies(self.trajectory, self.n, self.impacts)
@@ -214,12 +241,24 @@ class SimulationResult:
     @computed_once
     def first_impact(self) -> dict[str, Any]:
         """The first impact (MODEL section 6), computed on first use and kept."""
+        if self.tallied is not None:
+            return _from_tally(self.tallied[1], self.n, self.impacts)
         return _first_impact_summary(self)
 
     @computed_once
     def summary(self) -> dict[str, Any]:
         """The run (for a run to separation, its first impact), computed on first use and kept."""
-        return self.first_impact if self._to_separation() else _run_summary(self)
+        if self._to_separation():
+            return self.first_impact
+        return _run_summary(self) if self.tallied is None else _from_tally(self.tallied[0], self.n, self.impacts)
+
+    @property
+    def summary_tallied(self) -> Tallied | None:
+        """What `summary` is made from, as the C engine tallied it (None from the reference
+        engine): a sweep reads its columns without building the dict."""
+        if self.tallied is None:
+            return None
+        return self.tallied[1 if self._to_separation() else 0]
 
     def _to_separation(self) -> bool:
         return self.scene.solver.t_end is None and self.status != "failed"
@@ -423,6 +462,25 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
         "t_sustained": _sustained_start(result.phases),
         "t_final": t_last,
         "energy": energy,
+    }
+
+
+def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
+    """A summary as `_summary` lays it out, from what the C engine tallied; the lists of the
+    first impact's switches from its record."""
+    first = impacts[0] if impacts else None
+    y = s.y_final
+    return {
+        "T0": s.T0, "Tf": s.Tf, "delta_T": s.delta_T, "delta_max": s.delta_max, "delta_r": s.delta_r,
+        "P_max": s.P_max, "R_res": s.R_res, "t_contact": s.t_contact,
+        "t_impact": None if s.t_impact != s.t_impact else s.t_impact,  # NaN: no impact
+        "switches": _switch_list(first.switches) if first else [],
+        "stick_slip": _switch_list(first.stick_slip) if first else [],
+        "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": s.impacts,
+        "t_sustained": None if s.t_sustained != s.t_sustained else s.t_sustained,
+        "t_final": s.t_final,
+        "energy": {"W_normal": s.W_normal, "W_friction": s.W_friction, "W_gravity": s.W_gravity,
+                   "residual": s.residual},
     }
 
 

@@ -8,16 +8,19 @@ message into one that says what to try.
 """
 from __future__ import annotations
 
+import struct
 from typing import NamedTuple
 
 import numpy as np
 
 from .build import CompiledModel
 from .errors import SolverError
+from .results import Tallied
 from .scene import EXPLICIT_METHODS, METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
+Y_FINAL = Tallied._fields.index("y_final")
 
 
 class Segment(NamedTuple):
@@ -47,6 +50,22 @@ def struct_dtype(ffi, ctype: str, skip: tuple[str, ...] = ()) -> np.dtype:
                      "offsets": [f.offset for _, f in fields], "itemsize": ffi.sizeof(ctype)})
 
 
+def summary_record(ffi) -> struct.Struct:
+    """Two ig_summary records read in one call, as Python values in Tallied's order (which
+    mirrors the C struct's, y_final last: checked here, once per model)."""
+    fields = ffi.typeof("ig_summary").fields
+    if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
+        raise AssertionError(f"results.Tallied does not mirror cvode_glue.h's ig_summary: {fields}")
+    layout, at = "", 0
+    for _, f in fields:
+        item = f.type.item if f.type.kind == "array" else f.type
+        count = f.type.length if f.type.kind == "array" else 1
+        layout += "x" * (f.offset - at) + ("d" if item.cname == "double" else "i") * count
+        at = f.offset + ffi.sizeof(f.type)
+    layout += "x" * (ffi.sizeof("ig_summary") - at)
+    return struct.Struct("=" + layout * 2)
+
+
 class MachineRun(NamedTuple):
     """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
     ig_run's last return code with the message of a failure, and the time the run stopped."""
@@ -59,6 +78,7 @@ class MachineRun(NamedTuple):
     flag: int
     message: str
     t_last: float
+    summaries: tuple[Tallied, Tallied]  # over the whole run, over its first impact (ig_summarize)
 
 
 class CvodeSession:
@@ -107,6 +127,11 @@ class CvodeSession:
         self.output_index = {name: k for k, name in enumerate(model.output_names)}
         self._stats = ffi.new("ig_stats *")
         self._stats_row = np.frombuffer(ffi.buffer(self._stats), struct_dtype(ffi, "ig_stats"))
+        self.tally = ffi.new("ig_tally *")
+        self.summaries = ffi.new("ig_summary[2]")  # the run's, its first impact's
+        self._summary_args = (self.tally, self.summaries, self.summaries + 1)
+        self._summary_bytes = ffi.buffer(self.summaries)
+        self._summary_record = summary_record(ffi)
 
     def reset(self, scene: Scene) -> None:
         """Prepare the integrator for a run with the scene's tolerances (the absolute ones
@@ -147,16 +172,15 @@ class CvodeSession:
             self._alloc()
 
     def run(self, params, t0: float, t_stop: float, atol: float, max_segments: int, every_step: bool,
-            with_params: bool = False) -> "MachineRun":
+            in_contact: bool, with_params: bool = False) -> "MachineRun":
         """Run the phase machine (`machine`, started from (t0, `y0`)) to t_stop in C (ig_run),
         one call per buffer's worth: every step a sample when `every_step`, else only each
         segment's end. The samples begin with (t0, y0) as sample 0, its outputs under
-        `params`. `with_params` keeps a copy of each segment's parameters (to evaluate
-        outputs between its samples)."""
+        `params`; `in_contact`: the run starts with an impact. `with_params` keeps a copy of
+        each segment's parameters (to evaluate outputs between its samples). The run's
+        summaries are tallied in C on the way."""
         ffi, lib = self.model.ffi, self.model.lib
-        self.t_samples[0] = t0
-        self.y_samples[0] = self.y0
-        lib.ig_outputs(params, 1, self.t_buf, self.y_buf, self.out_buf)
+        self._first_sample(params, t0, in_contact)
         self.t_now[0] = t0
         dense = self.dense and every_step
         if dense:
@@ -169,7 +193,7 @@ class CvodeSession:
             flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, atol,
                               max_segments - len(segments), every_step, t_buf, y_buf, out_buf,
                               d_buf if dense else ffi.NULL, self.capacity - skip, self.n_out, self.segments,
-                              SEGMENT_CAPACITY, self.n_segments)
+                              SEGMENT_CAPACITY, self.n_segments, self.tally)
             k = self.n_out[0] + skip
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
@@ -185,7 +209,29 @@ class CvodeSession:
         else:
             t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
-        return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]))
+        return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]), self._summarized())
+
+    def _first_sample(self, params, t0: float, in_contact: bool) -> None:
+        """Write sample 0, (t0, y0) with its outputs, and begin the run's tally there."""
+        self.t_samples[0] = t0
+        self.y_samples[0] = self.y0
+        lib = self.model.lib
+        lib.ig_outputs(params, 1, self.t_buf, self.y_buf, self.out_buf)
+        lib.ig_tally_begin(self.tally, t0, self.y_buf, self.out_buf, in_contact)
+
+    def _summarized(self) -> tuple[Tallied, Tallied]:
+        self.model.lib.ig_summarize(*self._summary_args)
+        values = self._summary_record.unpack_from(self._summary_bytes)  # both records, one call
+        k = len(values) // 2
+        make = Tallied._make  # tuple.__new__: the class call would cost a microsecond more each
+        return make(values[:Y_FINAL] + (values[Y_FINAL:k],)), make(values[k:k + Y_FINAL] + (values[k + Y_FINAL:],))
+
+    def without_run(self, params, t0: float) -> tuple[np.ndarray, tuple[Tallied, Tallied]]:
+        """The outputs at (t0, y0), and the summaries of a run that ends where it begins (the
+        tip touches the surface without pressing in: no impact)."""
+        out = self.outputs(params, np.array([t0]), self.y0[None, :])
+        self.model.lib.ig_tally_begin(self.tally, t0, self.y0_c, self.model.ffi.from_buffer("double[]", out), False)
+        return out[0], self._summarized()
 
     def _segments(self, base: int, with_params: bool) -> list[Segment]:
         """The segment records of the last ig_run call, their sample indices from `base` on."""
