@@ -44,6 +44,50 @@ def test_grid_and_random_rows_equal_single_simulations():
             assert row["energy.W_normal"] == single["energy"]["W_normal"]
 
 
+def _flattened(summary: dict) -> dict:
+    """A summary as a table row spells it, written out independently of the sweep's code."""
+    row = {}
+    for key, value in summary.items():
+        if key in ("switches", "stick_slip"):
+            row[f"n_{key}"] = len(value)
+        elif isinstance(value, list):
+            row.update({f"{key}[{i}]": v for i, v in enumerate(value, start=1)})
+        elif isinstance(value, dict):
+            row.update({f"{key}.{k}": v for k, v in value.items()})
+        else:
+            row[key] = value
+    return row
+
+
+def test_a_chunk_s_summary_columns_are_the_summaries_of_its_cases():
+    """Columns made at once from the tallied summaries of a chunk's cases: named and valued as
+    each case's `summary`, NaN for a refused case and beyond a case's own link count."""
+    from impactgen.sweep.run import ChunkRows, CaseOptions, run_chunk
+    cases = [{"initial.u[2]": -0.3},
+             {"chain.links": 3, "chain.length": 0.7, "chain.mass": 1.0, "initial.q_deg": [-70, -60, -60],
+              "initial.u": [-0.1, -0.2, -0.2]},
+             {"rod.E": 1e9}, {"solver.t_end": 0.2}]
+    base = impactgen.load_scene(PAPER)
+    chunk = run_chunk(base.to_dict(), list(enumerate(cases)), CaseOptions())
+    assert isinstance(chunk, ChunkRows) and list(chunk.columns["status"]) == ["ok", "ok", "invalid", "ok"]
+    inputs = {key for case in cases for key in case}
+    names = [n for n in chunk.columns if n not in ("case", "status", "message", "warnings", "wall_s", *inputs)]
+    assert "u_final[3]" in names and "energy.residual" in names
+    for k, overrides in enumerate(cases):
+        if k == 2:
+            assert all(np.isnan(chunk.columns[n][k]) for n in names)
+            continue
+        row = _flattened(impactgen.simulate(base.replace(overrides)).summary)
+        for name in names:
+            value = chunk.columns[name][k]
+            expected = row.get(name)
+            if expected is None:
+                assert np.isnan(value), (k, name)
+            else:
+                assert value == expected, (k, name, value, expected)
+        assert set(row) <= set(names), set(row) - set(names)
+
+
 def test_a_sweep_freezes_the_callers_heap_only_while_it_runs():
     """The heap is frozen for the collector during a sweep (its workers fork from it) and
     handed back as it was: unfrozen, or frozen by the caller and left so."""

@@ -12,7 +12,6 @@ import json
 import os
 import time
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -21,11 +20,13 @@ import numpy as np
 from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
+from ..results import Tallied
 from ..scene import Scene, scene_from_dict, scene_with
 from . import execute
 from .spec import SweepSpec
 
 TRAJECTORY = "_trajectory"  # a row's key for the columns of a kept trajectory (not a column)
+SUMMARY = "_summary"  # a row's key for its tallied summary and link count (made columns per chunk)
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
 RESULT_FILE = "sweep.parquet"
 
@@ -40,8 +41,9 @@ class CaseOptions:
 
 
 def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
-    """One case of the scene `base`: its varied inputs, every scalar summary field, status,
-    message, warnings, time."""
+    """One case of the scene `base`: its varied inputs, its summary as the engine tallied it
+    (made columns for a whole chunk at once, `summary_columns`), status, message, warnings,
+    time."""
     started = time.perf_counter()
     row: dict[str, Any] = {"case": index, **overrides}
     try:
@@ -55,7 +57,7 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
     except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
         row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
         return row
-    row.update(flat_summary(result.summary))
+    row[SUMMARY] = (result.summary_tallied, scene.n)
     row.update(status=result.status, message=result.message, warnings=" | ".join(result.warnings),
                wall_s=time.perf_counter() - started)
     if keep_trajectory:
@@ -63,33 +65,37 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
     return row
 
 
-def flat_summary(summary: dict[str, Any]) -> dict[str, Any]:
-    """The summary's scalars as columns: u_final[1].., q_final[1].., W_normal, ..."""
-    row: dict[str, Any] = {}
-    for key, value in summary.items():
-        kind = type(value)  # exact types: this runs once per case
-        if kind is list:
-            if key in COUNTED:
-                row[f"n_{key}"] = len(value)
-            else:
-                row.update(zip(_column_names(key, len(value)), value))
-        elif kind is dict:
-            row.update(zip(_column_names(key, tuple(value)), value.values()))
-        else:
-            row[key] = value
-    return row
+SCALARS = ("T0", "Tf", "delta_T", "delta_max", "delta_r", "P_max", "R_res", "t_contact", "t_impact",
+           "n_switches", "n_stick_slip")  # the summary's leading scalars (the counts of its lists)
+LATER = ("impacts", "t_sustained", "t_final")
+ENERGY = ("W_normal", "W_friction", "W_gravity", "residual")  # the summary's energy budget
 
 
-COUNTED = frozenset({"switches", "stick_slip"})  # summary lists given as their count, n_switches, ...
-
-
-@lru_cache(maxsize=256)
-def _column_names(key: str, items: tuple[str, ...] | int) -> tuple[str, ...]:
-    """The columns of a summary entry that holds several values: energy.W_normal, ... for a
-    dict's keys, u_final[1], ... for a list's length (made once, not per case)."""
-    if isinstance(items, int):
-        return tuple(f"{key}[{i}]" for i in range(1, items + 1))
-    return tuple(f"{key}.{k}" for k in items)
+def summary_columns(tallied: list[tuple[Tallied, int] | None]) -> dict[str, np.ndarray]:
+    """The summaries of a chunk's cases (with their link counts) as the table's columns, as
+    `SimulationResult.summary` names its fields: the lists counted (n_switches, ...) or spread
+    (u_final[1], ...), the energy budget as energy.W_normal, ... A case without a summary
+    (refused, or not built), or with fewer links than another, has NaN there."""
+    cases = [k for k, t in enumerate(tallied) if t is not None]
+    if not cases:
+        return {}
+    fields = dict(zip(Tallied._fields, zip(*(tallied[k][0] for k in cases))))
+    links = [tallied[k][1] for k in cases]
+    n = max(links)
+    y = np.full((len(cases), 2 * n), np.nan)
+    for row, (values, links_here) in enumerate(zip(fields["y_final"], links)):
+        y[row, :links_here], y[row, n:n + links_here] = values[:links_here], values[links_here:2 * links_here]
+    columns = {name: np.array(fields[name]) for name in SCALARS}
+    columns.update({f"u_final[{i + 1}]": y[:, n + i] for i in range(n)})
+    columns.update({f"q_final[{i + 1}]": y[:, i] for i in range(n)})
+    columns.update({name: np.array(fields[name]) for name in LATER})
+    columns.update({f"energy.{name}": np.array(fields[name]) for name in ENERGY})
+    if len(cases) < len(tallied):  # the others' rows get NaN
+        for name, values in columns.items():
+            full = np.full(len(tallied), np.nan)
+            full[cases] = values
+            columns[name] = full
+    return columns
 
 
 @dataclass
@@ -105,10 +111,12 @@ class ChunkRows:
     @classmethod
     def from_rows(cls, rows: list[dict[str, Any]]) -> "ChunkRows":
         kept = {row["case"]: row.pop(TRAJECTORY) for row in rows if TRAJECTORY in row}
+        summaries = summary_columns([row.pop(SUMMARY, None) for row in rows])
         names: dict[str, Any] = {}  # every column, in first-seen order
         for row in rows:
             names.update(row)
-        return cls({name: _packed([row.get(name) for row in rows]) for name in names}, kept)  # None: no value
+        columns = {name: _packed([row.get(name) for row in rows]) for name in names}  # None: no value
+        return cls({**columns, **summaries}, kept)
 
     def __len__(self) -> int:
         return len(self.columns.get("case", ()))
