@@ -129,7 +129,9 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
         "surface.height": lambda: rng.choice(["initial", -1.8, 0.0]), "solver.rtol": lambda: rng.choice([1e-8, "x"]),
         "solver.t_end": lambda: rng.choice(["separation", 0.5]), "contact.friction_mode": lambda: rng.choice(
             ["coulomb", "bad"]), "chain.links": lambda: rng.choice([2, 3]), "solver.method": lambda: "adams",
-        "rod.tip_radius": lambda: rng.uniform(1e-4, 1e-2), "initial.u[3]": lambda: 0.1, "name": lambda: "x y"}
+        "rod.tip_radius": lambda: rng.uniform(1e-4, 1e-2), "initial.u[3]": lambda: 0.1, "name": lambda: "x y",
+        "rod.E": lambda: rng.choice([2e11, 5e8]), "surface.E": lambda: rng.choice([2e11, 5e8]),
+        "surface.yield_strength": lambda: rng.choice([1e9, 3e11])}
     for name in ("paper", "chain3-free-flight"):
         base = impactgen.load_scene(name)
         for _ in range(400):
@@ -141,6 +143,14 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
                 except SceneError as exc:
                     outcomes.append(str(exc))
             assert outcomes[0] == outcomes[1], overrides
+
+
+def test_the_keys_that_rerun_the_cross_key_checks_are_scene_keys():
+    """scene_with skips the cross-key checks when no key they read changed; a misspelt key
+    in that list would skip them for good."""
+    from impactgen.scene import _CROSS_CHECKED, split_key
+    for name in _CROSS_CHECKED:
+        split_key(name)
 
 
 def test_the_scene_refuses_a_parameter_exactly_where_its_table_range_ends():
