@@ -20,9 +20,9 @@ from typing import Any, Callable, Iterator
 
 from ..errors import SceneError
 
-CHUNKS_PER_WORKER = 8  # enough chunks to balance the load, few enough to keep overhead small
-MAX_CHUNK = 200  # cases: a lost chunk costs at most this much work again, and the last chunk to
-# finish keeps the other workers idle for at most this many cases
+GUIDED_SHARE = 2  # a chunk holds at most 1/(GUIDED_SHARE x workers) of the cases not yet sent
+MAX_CHUNK = 500  # cases: a lost or interrupted chunk costs at most this much work again
+SMALLEST_CHUNK = 16  # cases: below this a chunk's own cost (about 0.8 ms of the pool's) shows
 MAX_TASK_CHUNK = 1000  # cases per Dask task: a task costs the cluster about 5 ms (500 tasks of 200
 # cases doing nothing took 2.6 s on a LocalCluster of two workers), a pool's chunk about 0.8 ms
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
@@ -52,8 +52,17 @@ def frozen_heap() -> Iterator[None]:
 
 
 def chunked(cases: Chunk, workers: int, largest: int = MAX_CHUNK) -> list[Chunk]:
-    size = max(1, min(largest, -(-len(cases) // (workers * CHUNKS_PER_WORKER))))
-    return [cases[i:i + size] for i in range(0, len(cases), size)]
+    """The cases in chunks that shrink towards the end (guided scheduling): large chunks
+    while much is left, since each costs the driver and its worker a pause, and small ones
+    last, so that the workers finish together instead of one waiting on the other's last
+    large chunk."""
+    chunks, start = [], 0
+    while start < len(cases):
+        left = len(cases) - start
+        size = max(SMALLEST_CHUNK, min(largest, -(-left // (GUIDED_SHARE * workers))))
+        chunks.append(cases[start:start + size])
+        start += size
+    return chunks
 
 
 def lost_rows(chunk: Chunk, reason: str) -> list[dict[str, Any]]:
