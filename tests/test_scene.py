@@ -145,6 +145,25 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
             assert outcomes[0] == outcomes[1], overrides
 
 
+def test_checking_many_values_refuses_exactly_what_checking_each_refuses():
+    """check_values (a sweep's check of every value before it runs) passes plain floats by a
+    shortcut; it must refuse the same values, with the same message, as check_value."""
+    from impactgen.errors import SceneError
+    from impactgen.scene import check_value, check_values
+    values = [0.3, -0.2, 0.0, 0.5, 0.49, 1e9, 3e11, -1.0, 2, True, "x", float("nan"), float("inf"), [0.1, 0.2]]
+    for key in ("initial.u[2]", "rod.nu", "rod.yield_strength", "chain.mass[1]", "chain.mass", "contact.friction",
+                "surface.height", "chain.links", "solver.rtol"):
+        for value in values:
+            outcomes = []
+            for check in (lambda: check_value(key, value, 2), lambda: check_values(key, [value], 2)):
+                try:
+                    check()
+                    outcomes.append(None)
+                except SceneError as exc:
+                    outcomes.append(str(exc))
+            assert outcomes[0] == outcomes[1], (key, value)
+
+
 def test_the_keys_that_rerun_the_cross_key_checks_are_scene_keys():
     """scene_with skips the cross-key checks when no key they read changed; a misspelt key
     in that list would skip them for good."""

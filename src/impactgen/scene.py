@@ -14,7 +14,7 @@ import re
 from collections import abc
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 try:  # Python >= 3.11
     import tomllib
@@ -389,6 +389,19 @@ def check_value(dotted: str, value: Any, links: int) -> Any:
     if index is not None:
         return _checked(dotted, _number(dotted, value), spec)
     return _coerce(dotted, value, spec, links)
+
+
+def check_values(dotted: str, values: Iterable[Any], links: int) -> None:
+    """Every value for key `dotted` checked as `check_value` checks it. A finite float that
+    a number's own check takes passes without the coercion: a sweep checks every value it
+    will run (up to 1e6) before its first case, and the workers wait on that."""
+    section, key, index = split_key(dotted)
+    spec = SCHEMA[section][key]
+    number = index is not None or spec.kind == "float"  # a single number, not a list or a word
+    for value in values:
+        if number and type(value) is float and math.isfinite(value) and not (spec.check and spec.check(value)):
+            continue
+        check_value(dotted, value, links)
 
 
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:

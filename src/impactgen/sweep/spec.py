@@ -21,7 +21,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import SceneError
-from ..scene import Scene, check_value, parse_override, split_key
+from ..scene import Scene, check_values, parse_override, split_key
 
 GRIDS = ("linspace", "logspace")
 DISTRIBUTIONS = ("uniform", "normal", "lognormal")
@@ -143,6 +143,8 @@ class SweepSpec:
             columns = [a.draw(rng, self.random) for a in self.axes]
             return [dict(zip((a.key for a in self.axes), row)) for row in zip(*columns)]
         keys = [a.key for a in self.axes]
+        if len(keys) == 1:  # the common case, made without the product: 1e5 cases in a few ms
+            return [{keys[0]: value} for value in self.axes[0].values]
         return [dict(zip(keys, row)) for row in itertools.product(*(a.values for a in self.axes))]
 
     def check(self, scene: Scene, cases: list[dict[str, Any]]) -> None:
@@ -161,8 +163,7 @@ class SweepSpec:
             if links_vary and isinstance(values[0], list):
                 continue  # a per-link list is checked against its case's own link count
             try:
-                for value in values:
-                    check_value(axis.key, value, scene.n)
+                check_values(axis.key, values, scene.n)
             except SceneError as exc:
                 drawn = " (drawn from the distribution: narrow it or choose another)" if axis.distribution else ""
                 raise SceneError(exc.key, str(exc).split(": ", 1)[-1] + drawn) from None
