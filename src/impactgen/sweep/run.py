@@ -257,7 +257,6 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
 
 def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, progress: Progress | None,
          scheduler: str | None, trajectories: int | Iterable[int], on_resume: Callable[[int], None] | None):
-    import pandas as pd
     cases = spec.cases()
     spec.check(scene, cases)
     keep = _kept_cases(trajectories, len(cases))
@@ -282,7 +281,7 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
             parts.append(chunk)
             if progress:
                 progress(len(chunk))
-        frame = _table(frames + [pd.DataFrame(ChunkRows.joined(parts))] if parts else frames, spec)
+        frame = _table(frames, ChunkRows.joined(parts) if parts else None, spec)
         if folder:
             folder.write_result(frame)
         return frame
@@ -294,17 +293,38 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
 ROW_END = ("status", "message", "warnings", "wall_s")  # the last columns of the table
 
 
-def _table(frames: list, spec: SweepSpec):
-    """The chunks as one table in case order: case, the varied keys, the summary fields, then
-    status, message, warnings and wall time (a case run twice, by a resume, appears once)."""
+def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec: SweepSpec):
+    """The table in case order: case, the varied keys, the summary fields, then status,
+    message, warnings and wall time. `frames` are the parts of an earlier run, `columns` this
+    run's rows (a case run twice, by a resume, appears once). Without earlier parts the rows
+    are put in order by numpy before pandas sees them: a 20000-case table in about half the
+    time of pandas' own drop_duplicates, sort and selection."""
     import pandas as pd
+    if columns is not None and not frames:
+        order = np.argsort(columns["case"], kind="stable")
+        if not (np.diff(np.asarray(columns["case"])[order]) == 0).any():
+            return pd.DataFrame({name: _taken(columns[name], order) for name in _column_order(columns, spec)})
+    if columns is not None:
+        frames = [*frames, pd.DataFrame(columns)]
     if not frames:
         return pd.DataFrame(columns=["case", *(a.key for a in spec.axes), *ROW_END])
     frame = pd.concat(frames, ignore_index=True)
     frame = frame.drop_duplicates("case", keep="last").sort_values("case", ignore_index=True)
+    return frame[_column_order(frame.columns, spec)]
+
+
+def _column_order(names: Iterable[str], spec: SweepSpec) -> list[str]:
+    """case, the varied keys, the other columns as they come, then ROW_END."""
+    names = list(names)
     front = ["case", *(a.key for a in spec.axes)]
-    middle = [c for c in frame.columns if c not in front and c not in ROW_END]
-    return frame[front + middle + [c for c in ROW_END if c in frame.columns]]
+    middle = [c for c in names if c not in front and c not in ROW_END]
+    return front + middle + [c for c in ROW_END if c in names]
+
+
+def _taken(column: np.ndarray | list[Any], order: np.ndarray) -> np.ndarray | list[Any]:
+    if isinstance(column, np.ndarray):
+        return column[order]
+    return [column[i] for i in order.tolist()]
 
 
 def _kept_cases(trajectories: int | Iterable[int], total: int) -> frozenset[int]:
