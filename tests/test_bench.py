@@ -112,6 +112,8 @@ def test_sweep_benchmark_reports_overhead_and_the_cluster_run():
     from impactgen.bench import sweep as bench_sweep
     result = {"overhead": bench_sweep.measure_overhead(200, rounds=1), "monte_carlo": bench_sweep.monte_carlo(100)}
     assert result["overhead"]["ok"] == 200 and math.isfinite(result["overhead"]["ratio"])
+    outside, = result["overhead"]["outside_cases_s"]  # the sweep's own time: positive, below its wall time
+    assert 0 < outside < result["overhead"]["wall_s"]
     for where in ("pool", "dask"):
         run = result["monte_carlo"][where]
         assert "error" not in run, run
@@ -119,7 +121,7 @@ def test_sweep_benchmark_reports_overhead_and_the_cluster_run():
     rows = bench_sweep.sweep_targets(result)
     assert [r["verdict"] for r in rows][1:] == ["met", "met"]
     text = "\n".join(bench_sweep.sweep_report_lines(result))
-    assert "impacts/s" in text and "dask scheduler + 2 dask worker" in text
+    assert "impacts/s" in text and "dask scheduler + 2 dask worker" in text and "outside its cases" in text
 
 
 def test_the_pure_c_loop_is_measured_beside_the_python_api(monkeypatch):

@@ -99,18 +99,19 @@ def measure_overhead(cases: int, rounds: int = 3) -> dict:
     impactgen.simulate(impactgen.load_scene("paper"))  # the model loaded before any fork
     # a warm process, as the engine is timed in one: what a sweep imports (pandas, pyarrow) once
     impactgen.sweep("paper", vary={"initial.u[2]": "linspace(-0.5,-0.1,20)"}, workers=WORKERS)
-    ideals, walls, ok = [], [], 0
+    ideals, walls, outside, ok = [], [], [], 0
     for _ in range(rounds):
         ideals.append(_ideal(cases))
         started = time.perf_counter()
         table = impactgen.sweep("paper", vary={"initial.u[2]": f"linspace(-0.5,-0.1,{cases})"}, workers=WORKERS)
         walls.append(time.perf_counter() - started)
+        outside.append(walls[-1] - float(table["wall_s"].sum()) / WORKERS)
         ok = int((table["status"] == "ok").sum())
     ideal, wall = statistics.median(ideals), statistics.median(walls)
     ratios = [w / i for w, i in zip(walls, ideals)]
     return {"cases": cases, "workers": WORKERS, "rounds": rounds, "wall_s": wall, "walls_s": walls,
             "ideal_s": ideal, "ideals_s": ideals, "engine_ms": ideal * WORKERS / cases * 1e3,
-            "ratios": ratios, "ratio": statistics.median(ratios), "ok": ok}
+            "ratios": ratios, "ratio": statistics.median(ratios), "ok": ok, "outside_cases_s": outside}
 
 
 def _drive(cases: int, scheduler: str | None) -> dict:
@@ -203,6 +204,12 @@ def sweep_report_lines(result: dict) -> list[str]:
                   f"{', '.join(f'{w:.2f}' for w in o['ideals_s'])} s ({o['engine_ms']:.3f} ms per impact). "
                   f"Each round's ratio: {', '.join(f'{r:.2f}' for r in o.get('ratios', []))}; their median "
                   f"{o['ratio']:.2f} (the medians of each: {o['wall_s']:.2f} s against {o['ideal_s']:.2f} s).", ""]
+        if "outside_cases_s" in o:
+            lines += ["Of each sweep's wall time, the part outside its cases (the wall time less the cases' "
+                      f"own times, `wall_s`, shared over the {o['workers']} workers: the start before the "
+                      "first chunk, the pauses between chunks, the end after the last, uneven finishing): "
+                      f"{', '.join(f'{w:.3f}' for w in o['outside_cases_s'])} s. The rest, the cases "
+                      "themselves, is what varies with this host's speed from round to round.", ""]
     mc = result.get("monte_carlo")
     if mc:
         lines += [f"Monte Carlo, {mc['cases']} cases, seed {MONTE_CARLO_SEED}, inputs drawn as:", ""]
