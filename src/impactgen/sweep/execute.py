@@ -23,6 +23,8 @@ from ..errors import SceneError
 GUIDED_SHARE = 2  # a chunk holds at most 1/(GUIDED_SHARE x workers) of the cases not yet sent
 MAX_CHUNK = 500  # cases: a lost or interrupted chunk costs at most this much work again
 SMALLEST_CHUNK = 16  # cases: below this a chunk's own cost (about 0.8 ms of the pool's) shows
+IN_PROCESS_SHARES = 4  # in this process, chunks as a pool of four has them: the first an eighth
+# of the cases, so that the progress bar moves and an interrupt loses little
 MAX_TASK_CHUNK = 1000  # cases per Dask task: a task costs the cluster about 5 ms (500 tasks of 200
 # cases doing nothing took 2.6 s on a LocalCluster of two workers), a pool's chunk about 0.8 ms
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
@@ -72,7 +74,7 @@ def lost_rows(chunk: Chunk, reason: str) -> list[dict[str, Any]]:
 
 
 def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk) -> Iterator[Any]:
-    for chunk in chunked(todo, 1):
+    for chunk in chunked(todo, IN_PROCESS_SHARES):
         yield run_chunk(payload, chunk, options)
 
 
