@@ -439,49 +439,41 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
     traj, n = result.trajectory, result.n
     T0, Tf, energy = _budget(traj, n, i0, i1) if budget is None else budget
     t_last = float(traj.t[i1])
-    last = traj.y[i1].tolist()
     first = impacts[0] if impacts else None
     deepest = max(impacts, key=_dent) if len(impacts) > 1 else first
     contact = sum((i.t_end if i.t_end is not None else t_last) - i.t_start
                   for i in impacts if i.t_end is not None or count_open)
-    return {
-        "T0": T0,
-        "Tf": Tf,
-        "delta_T": T0 - Tf,
-        "delta_max": max([i.delta_max for i in impacts], default=0.0),
-        "delta_r": deepest.delta_r if deepest else 0.0,
-        "P_max": max([i.P_max for i in impacts], default=0.0),
-        "R_res": deepest.R_res if deepest else 0.0,
-        "t_contact": float(contact),
-        "t_impact": first.t_start if first else None,
-        "switches": _switch_list(first.switches) if first else [],
-        "stick_slip": _switch_list(first.stick_slip) if first else [],
-        "u_final": last[n: 2 * n],
-        "q_final": last[:n],
-        "impacts": len(result.impacts),
-        "t_sustained": _sustained_start(result.phases),
-        "t_final": t_last,
-        "energy": energy,
-    }
+    sustained = _sustained_start(result.phases)
+    tallied = Tallied(
+        T0, Tf, T0 - Tf, max([i.delta_max for i in impacts], default=0.0), deepest.delta_r if deepest else 0.0,
+        max([i.P_max for i in impacts], default=0.0), deepest.R_res if deepest else 0.0, float(contact),
+        first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
+        *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
+        len(first.stick_slip) if first else 0, len(result.impacts), tuple(traj.y[i1].tolist()))
+    return _from_tally(tallied, n, impacts)
+
+
+SUMMARY_LEADING = Tallied._fields[:9]  # T0 .. t_impact: the summary's first entries, in its order
+SUMMARY_LATER = ("impacts", "t_sustained", "t_final")  # its entries after the final state
+ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy budget, as energy_balance
 
 
 def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
-    """A summary as `_summary` lays it out, from what the C engine tallied; the lists of the
-    first impact's switches from its record."""
+    """A summary dict (MODEL section 6) from its values (as the C engine tallies them, or as
+    `_summary` computes them from the samples); the lists of the first impact's switches
+    from its record. NaN (nothing to report) is None here."""
     first = impacts[0] if impacts else None
     y = s.y_final
-    return {
-        "T0": s.T0, "Tf": s.Tf, "delta_T": s.delta_T, "delta_max": s.delta_max, "delta_r": s.delta_r,
-        "P_max": s.P_max, "R_res": s.R_res, "t_contact": s.t_contact,
-        "t_impact": None if s.t_impact != s.t_impact else s.t_impact,  # NaN: no impact
-        "switches": _switch_list(first.switches) if first else [],
-        "stick_slip": _switch_list(first.stick_slip) if first else [],
-        "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": s.impacts,
-        "t_sustained": None if s.t_sustained != s.t_sustained else s.t_sustained,
-        "t_final": s.t_final,
-        "energy": {"W_normal": s.W_normal, "W_friction": s.W_friction, "W_gravity": s.W_gravity,
-                   "residual": s.residual},
-    }
+    summary = dict(zip(SUMMARY_LEADING, s))
+    if s.t_impact != s.t_impact:
+        summary["t_impact"] = None
+    summary.update(switches=_switch_list(first.switches) if first else [],
+                   stick_slip=_switch_list(first.stick_slip) if first else [],
+                   u_final=list(y[n: 2 * n]), q_final=list(y[:n]))
+    summary.update(zip(SUMMARY_LATER, (s.impacts, None if s.t_sustained != s.t_sustained else s.t_sustained,
+                                       s.t_final)))
+    summary["energy"] = dict(zip(ENERGY_TERMS, (s.W_normal, s.W_friction, s.W_gravity, s.residual)))
+    return summary
 
 
 def _dent(impact: Impact) -> float:

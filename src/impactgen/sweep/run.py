@@ -20,7 +20,7 @@ import numpy as np
 from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
-from ..results import Tallied
+from ..results import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, Tallied
 from ..scene import Scene, scene_from_dict, scene_with
 from . import execute
 from .spec import SweepSpec
@@ -66,10 +66,7 @@ def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory
     return row
 
 
-SCALARS = ("T0", "Tf", "delta_T", "delta_max", "delta_r", "P_max", "R_res", "t_contact", "t_impact",
-           "n_switches", "n_stick_slip")  # the summary's leading scalars (the counts of its lists)
-LATER = ("impacts", "t_sustained", "t_final")
-ENERGY = ("W_normal", "W_friction", "W_gravity", "residual")  # the summary's energy budget
+SCALARS = (*SUMMARY_LEADING, "n_switches", "n_stick_slip")  # the summary's leading scalars, its lists counted
 
 
 def summary_columns(tallied: list[tuple[Tallied, int] | None]) -> dict[str, np.ndarray]:
@@ -92,8 +89,8 @@ def summary_columns(tallied: list[tuple[Tallied, int] | None]) -> dict[str, np.n
     columns = {name: np.array(fields[name]) for name in SCALARS}
     columns.update({f"u_final[{i + 1}]": y[:, n + i] for i in range(n)})
     columns.update({f"q_final[{i + 1}]": y[:, i] for i in range(n)})
-    columns.update({name: np.array(fields[name]) for name in LATER})
-    columns.update({f"energy.{name}": np.array(fields[name]) for name in ENERGY})
+    columns.update({name: np.array(fields[name]) for name in SUMMARY_LATER})
+    columns.update({f"energy.{name}": np.array(fields[name]) for name in ENERGY_TERMS})
     if len(cases) < len(tallied):  # the others' rows get NaN
         for name, values in columns.items():
             full = np.full(len(tallied), np.nan)
