@@ -52,7 +52,7 @@ def struct_dtype(ffi, ctype: str, skip: tuple[str, ...] = ()) -> np.dtype:
 
 def summary_record(ffi) -> struct.Struct:
     """Two ig_summary records read in one call, as Python values in Tallied's order (which
-    mirrors the C struct's, y_final last: checked here, once per model)."""
+    mirrors the C struct's, y_final last: checked here, once per session)."""
     fields = ffi.typeof("ig_summary").fields
     if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
         raise AssertionError(f"results.Tallied does not mirror cvode_glue.h's ig_summary: {fields}")

@@ -591,16 +591,15 @@ void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *
     }
 }
 
-/* Add the latest impact's record to the run's: the largest delta_max and P_max, the deepest
- * dent (the first of equals), its contact time up to t_end. */
-static void fold_impact(ig_tally *a, double delta_max, double P_max, double delta_r, double R_res,
-                        double contact, int first_folded)
+/* Add the latest impact's record (a->now_...) to the run's: the largest delta_max and P_max,
+ * the deepest dent (the first of equals), its contact time. */
+static void fold_impact(ig_tally *a, double contact, int first_folded)
 {
-    if (delta_max > a->delta_max) a->delta_max = delta_max;
-    if (P_max > a->P_max) a->P_max = P_max;
-    if (first_folded || delta_r > a->deepest_delta_r) {
-        a->deepest_delta_r = delta_r;
-        a->deepest_R_res = R_res;
+    if (a->now_delta_max > a->delta_max) a->delta_max = a->now_delta_max;
+    if (a->now_P_max > a->P_max) a->P_max = a->now_P_max;
+    if (first_folded || a->now_delta_r > a->deepest_delta_r) {
+        a->deepest_delta_r = a->now_delta_r;
+        a->deepest_R_res = a->now_R_res;
     }
     a->t_contact += contact;
 }
@@ -630,8 +629,7 @@ static void tally_segment(ig_tally *a, const ig_segment *seg, const double *t_bu
         if (seg->state != MODEL_MACHINE_FREE && seg->next_state != seg->state) a->first_switches++;
     }
     if (seg->act & MODEL_ACT_IMPACT_END) {
-        fold_impact(a, a->now_delta_max, a->now_P_max, a->now_delta_r, a->now_R_res, seg->t - a->now_start,
-                    a->ended++ == 0);
+        fold_impact(a, seg->t - a->now_start, a->ended++ == 0);
         if (a->impacts == 1) {
             read_point(&a->first_end, t_buf[k], y, out);
             a->first_delta_max = a->now_delta_max;
@@ -660,10 +658,7 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
 {
     const int open = a->impacts > a->ended;  /* the latest impact is still in contact */
     ig_tally all = *a;
-    if (open) {
-        fold_impact(&all, a->now_delta_max, a->now_P_max, a->now_delta_r, a->now_R_res, a->last.t - a->now_start,
-                    a->ended == 0);
-    }
+    if (open) fold_impact(&all, a->last.t - a->now_start, a->ended == 0);
     memset(run, 0, sizeof *run);
     summarize_between(&a->start, &a->last, run);
     run->delta_max = all.delta_max;
@@ -695,25 +690,8 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     first->t_sustained = a->t_sustained;
 }
 
-static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
-                       double atol, long max_segments, int every_step, double *t_buf, double *y_buf,
-                       double *out_buf, double *dense_buf, int capacity, int *n_written, ig_segment *segments,
-                       int segment_capacity, int *n_segments, ig_tally *tally);
-
-int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
-           double atol, long max_segments, int every_step,
-           double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
-           ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally)
-{
-    const int flag = run_machine(s, m, p, t, y, t_stop, atol, max_segments, every_step, t_buf, y_buf, out_buf,
-                                 dense_buf, capacity, n_written, segments, segment_capacity, n_segments, tally);
-    if (tally && *n_written > 0) {
-        const long k = *n_written - 1;
-        read_point(&tally->last, t_buf[k], y_buf + (size_t)k * MODEL_NSTATE, out_buf + (size_t)k * MODEL_NOUT);
-    }
-    return flag;
-}
-
+/* ig_run's loop over the segments (cvode_glue.h); ig_run then notes its last sample in the
+ * tally, whichever way the loop returned. */
 static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
                        double atol, long max_segments, int every_step, double *t_buf, double *y_buf,
                        double *out_buf, double *dense_buf, int capacity, int *n_written, ig_segment *segments,
@@ -787,6 +765,20 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
             if (ig_solver_set_atol(s, atol_now) != 0) return IG_ERR_USAGE;
         }
     }
+}
+
+int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
+           double atol, long max_segments, int every_step,
+           double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
+           ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally)
+{
+    const int flag = run_machine(s, m, p, t, y, t_stop, atol, max_segments, every_step, t_buf, y_buf, out_buf,
+                                 dense_buf, capacity, n_written, segments, segment_capacity, n_segments, tally);
+    if (tally && *n_written > 0) {
+        const long k = *n_written - 1;
+        read_point(&tally->last, t_buf[k], y_buf + (size_t)k * MODEL_NSTATE, out_buf + (size_t)k * MODEL_NOUT);
+    }
+    return flag;
 }
 
 void ig_solver_stats(const ig_solver *s, ig_stats *stats)
