@@ -37,13 +37,11 @@ static const double d1 = -12715105075.0 / 11282082432.0, d3 = 87487479700.0 / 32
                     d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0,
                     d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
 
+/* model_rhs returns nonzero where it fails, and for any derivative that is not finite. */
 static int rhs(ig_dopri5 *r, double t, const double *y, double *f)
 {
     r->nfev++;
-    if (model_rhs(t, y, f, r->params) != 0) return -1;
-    double zero = 0.0;  /* 0 * f is 0 for every finite f and NaN for an infinite or NaN one */
-    for (int i = 0; i < N; ++i) zero += 0.0 * f[i];
-    return zero == 0.0 ? 0 : -1;
+    return model_rhs(t, y, f, r->params) != 0 ? -1 : 0;
 }
 
 static void watched(ig_dopri5 *r, double t, const double *y, double *g)
@@ -278,16 +276,16 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
             r->rejected = 1;
             continue;
         }
-        const double fac11 = pow(err, expo);
-        const double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, fac11 / pow(r->fac_old, BETA) / SAFE));
-        double h_new = h / fac;
         if (err > 1.0) {  /* rejected: a smaller step */
             r->netfails++;
             r->h = r->nsteps == 0 ? h * fmax(FAC_MIN_START, SAFE * pow(err, -0.2))
-                                  : h / fmin(1.0 / FAC_MIN, fac11 / SAFE);
+                                  : h / fmin(1.0 / FAC_MIN, pow(err, expo) / SAFE);
             r->rejected = 1;
             continue;
         }
+        /* accepted: the PI controller's next step (its powers computed only here, where they are used) */
+        const double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, pow(err, expo) / pow(r->fac_old, BETA) / SAFE));
+        double h_new = h / fac;
         r->fac_old = fmax(err, ERR_FLOOR);
         keep_extension(r, h, y1);
         r->t_old = r->t;
