@@ -17,7 +17,7 @@ import numpy as np
 
 from .dense import DenseSolution
 from .scene import Scene
-from .validity import YieldScale, validity_warnings
+from .validity import YieldScale, energy_warning, validity_warnings
 
 # The scalar outputs every model computes at each sample (T1..Tn, the kinetic energy per
 # link, come beside them), with their units.
@@ -343,7 +343,13 @@ class SimulationResult:
     @computed_once
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity (see validity.py)."""
-        return validity_warnings(self.scene, self.impacts, self.contact)
+        s = self.summary_tallied
+        if s is not None:  # the C engine's summary, without building its dict
+            budget = (s.T0, s.Tf, s.W_normal, s.W_friction, s.W_gravity, s.residual)
+        else:
+            summary = self.summary
+            budget = (summary["T0"], summary["Tf"], *(summary["energy"][k] for k in ENERGY_TERMS))
+        return validity_warnings(self.scene, self.impacts, self.contact) + energy_warning(self.scene, *budget)
 
     def impacts_frame(self):
         """The impacts as a pandas DataFrame, one row per impact (units in `IMPACT_UNITS`).
