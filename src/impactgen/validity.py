@@ -17,9 +17,9 @@ Checked per impact from what was recorded at maximum compression:
 
 And per run, from its summary: the energy budget does not close. The works of the normal
 force, friction and gravity are integrated beside the motion, so their sum must match the
-change of kinetic energy to about rtol times the largest of them; far beyond that the
-integrator did not resolve the motion (a friction layer thinner than its steps, for one),
-whatever its own error estimate said.
+change of kinetic energy to a small multiple of rtol times the largest of them; a hundred
+thousand times that, and the integrator did not resolve the motion (a friction layer
+thinner than its steps, for one), whatever its own error estimate said.
 """
 from __future__ import annotations
 
@@ -60,11 +60,14 @@ class YieldScale(NamedTuple):
 
 
 RESOLUTION_MARGIN = 100.0  # delta_max should exceed the tip's positional resolution this much
-# The energy budget closes to ENERGY_MARGIN rtol of its largest term, or to ENERGY_FLOOR of it
-# (the rounding of long runs), whichever is looser. Measured: 0.004 to 9.4 rtol on the bundled
-# scenes at rtol 1e-3 to 1e-10; 5e6 rtol for the stiff friction of docs/model.md at rtol 1e-8.
-ENERGY_MARGIN = 1000.0
-ENERGY_FLOOR = 1e-8
+# The energy budget closes to ENERGY_MARGIN rtol of its largest term, or to ENERGY_FLOOR of it,
+# whichever is looser: a bound for gross errors, since the works' global error grows with the
+# run. Measured (the budget's residual over its largest term, in units of rtol): 0.004 to 9.4
+# on the bundled scenes at rtol 1e-3 to 1e-10, up to 7200 on the stability catalogue's runs
+# that pass its checks (5 s runs with sustained contact: 1.5e-7 of the largest term at
+# rtol 1e-11), and 5.4e6 for the stiff friction of docs/model.md under BDF at rtol 1e-8.
+ENERGY_MARGIN = 1e5
+ENERGY_FLOOR = 1e-6
 
 
 def validity_warnings(scene: Scene, impacts, contact: YieldScale | None = None) -> list[str]:
@@ -119,8 +122,9 @@ def _grouped(found: dict[str, list[tuple[int, str]]], n_impacts: int) -> list[st
 
 def energy_warning(scene: Scene, T0: float, Tf: float, W_normal: float, W_friction: float, W_gravity: float,
                    residual: float) -> list[str]:
-    """A warning when the run's energy budget (its summary's) does not close to within
-    ENERGY_MARGIN rtol of its largest term: the motion was not resolved."""
+    """A warning when the run's energy budget (its summary's) misses by more than
+    ENERGY_MARGIN rtol of its largest term (ENERGY_FLOOR at least): the motion was not
+    resolved."""
     scale = max(abs(T0), abs(Tf), abs(W_normal), abs(W_friction), abs(W_gravity))
     allowed = max(ENERGY_MARGIN * scene.solver.rtol, ENERGY_FLOOR) * scale
     if abs(residual) <= allowed:
