@@ -208,7 +208,8 @@ class SimulationResult:
     first_impact : dict
         The first impact alone (MODEL section 6), with its energy budget.
     warnings : list of str
-        Where the result leaves the model's range of validity.
+        Where the result leaves the model's range of validity, and whether its energy
+        budget fails to close (the integrator did not resolve the motion).
     stats : dict
         Integrator counters and the wall time.
 
@@ -342,7 +343,8 @@ class SimulationResult:
 
     @computed_once
     def warnings(self) -> list[str]:
-        """Where this result leaves the model's range of validity (see validity.py)."""
+        """Where this result leaves the model's range of validity, and an energy budget that
+        does not close (see validity.py)."""
         s = self.summary_tallied
         if s is not None:  # the C engine's summary, without building its dict
             budget = (s.T0, s.Tf, s.W_normal, s.W_friction, s.W_gravity, s.residual)
