@@ -6,6 +6,7 @@ the same sympy expressions the force laws are printed from. The phase machine se
 """
 from __future__ import annotations
 
+import struct
 from functools import lru_cache
 
 from .build import CompiledModel
@@ -15,18 +16,27 @@ from .scene import Scene
 
 
 @lru_cache(maxsize=64)
-def _readers(param_names: tuple[str, ...], links: int) -> tuple[tuple[str, object, int], ...]:
-    """(field, reader, link) of each field of a model's struct that a scene sets, in struct
-    order: the loop of `fill_params`, made once per model."""
+def _readers(ffi, links: int) -> tuple[struct.Struct, tuple[tuple[object, int], ...]]:
+    """The fields of a model's struct that a scene sets: their (reader, link) in struct
+    order, and the layout that writes their values into the struct in one call (the loop
+    of `fill_params`, made once per model (its ffi); a field at a time costs a C crossing each)."""
     inputs = {name: (p.read, link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
-    return tuple((name, *inputs[name]) for name in param_names if name in inputs)
+    layout, at, readers = "=", 0, []
+    for name, field in sorted(ffi.typeof("model_params").fields, key=lambda item: item[1].offset):
+        if name in inputs:
+            assert field.type.cname == "double", f"the scene input {name} is not a double in model_params"
+            layout += "x" * (field.offset - at) + "d"
+            at = field.offset + 8
+            readers.append(inputs[name])
+    return struct.Struct(layout), tuple(readers)
 
 
 def fill_params(model: CompiledModel, scene: Scene):
     """A new `model_params` for `scene`: its inputs, then the derived constants."""
-    params = model.ffi.new("model_params *")
-    for name, read, link in _readers(model.param_names, model.spec.links):
-        setattr(params, name, read(scene, link))
+    ffi = model.ffi
+    params = ffi.new("model_params *")  # zeroed: the struct's other fields stay 0 under the layout's pad bytes
+    layout, readers = _readers(ffi, model.spec.links)
+    layout.pack_into(ffi.buffer(params), 0, *[read(scene, link) for read, link in readers])
     derive(model, params)
     return params
 
