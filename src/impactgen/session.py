@@ -41,13 +41,20 @@ class Segment(NamedTuple):
     params: object  # a copy of the model_params it ran under (cffi), when asked for, else None
 
 
-def struct_dtype(ffi, ctype: str, skip: tuple[str, ...] = ()) -> np.dtype:
-    """A numpy view of a C struct of doubles and integers (its other fields left out), laid
-    out as the compiler laid it out: read a whole array of records in one call."""
-    fields = [(name, f) for name, f in ffi.typeof(ctype).fields if name not in skip]
-    return np.dtype({"names": [name for name, _ in fields],
-                     "formats": ["f8" if f.type.cname == "double" else f"i{ffi.sizeof(f.type)}" for _, f in fields],
-                     "offsets": [f.offset for _, f in fields], "itemsize": ffi.sizeof(ctype)})
+def record_layout(ffi, ctype: str, skip: tuple[str, ...] = ()) -> str:
+    """The struct-module format of a C struct of doubles, integers and arrays of them (its
+    `skip` fields passed over as pad bytes), laid out as the compiler laid it out: Python
+    values of a whole record in one call, cheaper than a numpy record's."""
+    codes = {("double", 8): "d", ("int", 4): "i", ("long", 8): "q", ("long", 4): "i"}
+    layout, at = "", 0
+    for name, f in ffi.typeof(ctype).fields:
+        if name in skip:
+            continue
+        item = f.type.item if f.type.kind == "array" else f.type
+        count = f.type.length if f.type.kind == "array" else 1
+        layout += "x" * (f.offset - at) + codes[item.cname, ffi.sizeof(item)] * count
+        at = f.offset + ffi.sizeof(f.type)
+    return layout + "x" * (ffi.sizeof(ctype) - at)
 
 
 def summary_record(ffi) -> struct.Struct:
@@ -56,14 +63,7 @@ def summary_record(ffi) -> struct.Struct:
     fields = ffi.typeof("ig_summary").fields
     if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
         raise AssertionError(f"results.Tallied does not mirror cvode_glue.h's ig_summary: {fields}")
-    layout, at = "", 0
-    for _, f in fields:
-        item = f.type.item if f.type.kind == "array" else f.type
-        count = f.type.length if f.type.kind == "array" else 1
-        layout += "x" * (f.offset - at) + ("d" if item.cname == "double" else "i") * count
-        at = f.offset + ffi.sizeof(f.type)
-    layout += "x" * (ffi.sizeof("ig_summary") - at)
-    return struct.Struct("=" + layout * 2)
+    return struct.Struct("=" + record_layout(ffi, "ig_summary") * 2)
 
 
 class MachineRun(NamedTuple):
@@ -117,7 +117,8 @@ class CvodeSession:
         self.machine = ffi.new("model_machine *")
         self.atol_now = ffi.new("double[]", model.nstate)
         self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
-        self.segment_rows = np.frombuffer(ffi.buffer(self.segments), struct_dtype(ffi, "ig_segment", ("params",)))
+        self._segment_bytes = ffi.buffer(self.segments)
+        self._segment_record = struct.Struct("=" + record_layout(ffi, "ig_segment", ("params",)))
         self.n_segments = ffi.new("int *")
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
@@ -126,7 +127,9 @@ class CvodeSession:
         self.y0_c = ffi.from_buffer("double[]", self.y0)
         self.output_index = {name: k for k, name in enumerate(model.output_names)}
         self._stats = ffi.new("ig_stats *")
-        self._stats_row = np.frombuffer(ffi.buffer(self._stats), struct_dtype(ffi, "ig_stats"))
+        self._stats_bytes = ffi.buffer(self._stats)
+        self._stats_record = struct.Struct("=" + record_layout(ffi, "ig_stats"))
+        self._stats_names = tuple(name for name, _ in ffi.typeof("ig_stats").fields)
         self.tally = ffi.new("ig_tally *")
         self.summaries = ffi.new("ig_summary[2]")  # the run's, its first impact's
         self._summary_args = (self.tally, self.summaries, self.summaries + 1)
@@ -236,11 +239,13 @@ class CvodeSession:
     def _segments(self, base: int, with_params: bool) -> list[Segment]:
         """The segment records of the last ig_run call, their sample indices from `base` on."""
         count = self.n_segments[0]
-        rows = self.segment_rows[:count].tolist()
-        params = ([self.model.ffi.new("model_params *", self.segments[j].params) for j in range(count)]
-                  if with_params else [None] * count)
+        rows = self._segment_record.iter_unpack(self._segment_bytes[:count * self._segment_record.size])
         make = Segment._make
-        return [make((r[0], base + r[1], *r[2:], p)) for r, p in zip(rows, params)]
+        if not with_params:
+            return [make((r[0], base + r[1]) + r[2:] + (None,)) for r in rows]
+        new = self.model.ffi.new
+        return [make((r[0], base + r[1]) + r[2:] + (new("model_params *", self.segments[j].params),))
+                for j, r in enumerate(rows)]
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
@@ -253,7 +258,7 @@ class CvodeSession:
 
     def stats(self) -> dict[str, int]:
         self.model.lib.ig_solver_stats(self.solver, self._stats)
-        return dict(zip(self._stats_row.dtype.names, self._stats_row[0].tolist()))
+        return dict(zip(self._stats_names, self._stats_record.unpack_from(self._stats_bytes)))
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
