@@ -41,6 +41,16 @@ def test_summary_is_computed_once_with_plain_floats(paper_result):
     assert r.summary is r.first_impact  # a run to separation is its first impact
 
 
+def test_summary_keys_are_in_the_order_a_sweep_writes_its_columns(paper_result, bouncing):
+    """The sweep names its columns from results' key lists; both engines' summaries, of an
+    impact and of a whole run, follow them."""
+    from impactgen.results import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
+    expected = [*SUMMARY_LEADING, "switches", "stick_slip", "u_final", "q_final", *SUMMARY_LATER, "energy"]
+    reference = impactgen.simulate(paper_result.scene, engine="reference")
+    for summary in (paper_result.summary, reference.summary, bouncing.summary):
+        assert list(summary) == expected and list(summary["energy"]) == list(ENERGY_TERMS)
+
+
 def test_a_result_pickles_with_its_summary_and_warnings():
     """A result crosses processes (a user's own pool): it holds plain data, no C objects."""
     import pickle

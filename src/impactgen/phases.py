@@ -11,6 +11,7 @@ trajectory, and the samples at `t_eval` or the dense output.
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Columns, Impact, PhaseRuns, PhaseSpan, SimulationResult, Tallied, Trajectory
+from .results import Columns, Impact, PhaseSpan, SimulationResult, Tallied, Trajectory
 from .scene import Scene
 from .session import CvodeSession, MachineRun, Segment
 from .validity import YieldScale
@@ -76,18 +77,12 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     spans, impacts = _spans_and_impacts(machine, model.event_names, ran.segments, in_contact)
     status, message = _status(lib, scene, machine, ran, impacts)
 
-    # the samples: the start, then each segment's (after sample cuts[j] to sample
-    # cuts[j + 1]; a failed segment's rows last), each labelled by its state
-    cuts = [0, *(seg.sample for seg in ran.segments), len(ran.t) - 1]
-    states = [state0, *(seg.state for seg in ran.segments), m.state]
-    trajectory = Trajectory(
-        t=ran.t, y=ran.y, phase=PhaseRuns([STATES[s] for s in states], [1, *(b - a for a, b in zip(cuts, cuts[1:]))]),
-        outputs=Columns(session.output_index, ran.outputs),
-    )
+    trajectory = Trajectory(t=ran.t, y=ran.y, phase=partial(_phase_labels, ran.segments, len(ran.t), state0, m.state),
+                            outputs=Columns(session.output_index, ran.outputs))
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
-        pieces = _step_pieces(session, model, ran, cuts, states, params, sampler)
+        pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, m.state), params, sampler)
         if dense_output:
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
     stats = session.stats()
@@ -100,18 +95,31 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                             ran.summaries)
 
 
+def _runs(segments: list[Segment], n_samples: int, state0: int, state_end: int) -> tuple[list[int], list[int]]:
+    """The samples as runs of one machine state: the start, then each segment's (after
+    sample cuts[j] to sample cuts[j + 1]; a failed segment's rows last), in states[j + 1]."""
+    cuts = [0, *(seg.sample for seg in segments), n_samples - 1]
+    return cuts, [state0, *(seg.state for seg in segments), state_end]
+
+
+def _phase_labels(segments: list[Segment], n_samples: int, state0: int, state_end: int) -> np.ndarray:
+    """The phase of the step that ended at each sample (the start: the state it began in)."""
+    cuts, states = _runs(segments, n_samples, state0, state_end)
+    return np.repeat(np.array([STATES[s] for s in states]), [1, *np.diff(cuts)])
+
+
 def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments: list[Segment],
                        contact_at_start: bool) -> tuple[list[PhaseSpan], list[Impact]]:
     """The phase spans and the impacts, from the machine's record of each segment."""
     spans: list[PhaseSpan] = []
     impacts = [Impact(t_start=0.0, i_start=0)] if contact_at_start else []
-    lib, label = machine.lib, machine.slip_label
+    lib, label, coulomb = machine.lib, machine.slip_label, machine.coulomb
     BEGIN, SLIP, MAX_COMPRESSION, END = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP,
                                          lib.MODEL_ACT_MAX_COMPRESSION, lib.MODEL_ACT_IMPACT_END)
     t0 = 0.0
     for seg in segments:
         phase, new_phase, t, act = STATES[seg.state], STATES[seg.next_state], seg.t, seg.act
-        slip = label(seg.state, seg.slip)
+        slip = label(seg.state, seg.slip) if coulomb else ""
         spans.append(PhaseSpan(phase, t0, t, event_names[seg.event] if seg.event >= 0 else "t_end", slip))
         t0 = t
         if act & BEGIN:

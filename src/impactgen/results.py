@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -88,26 +88,20 @@ class Trajectory:
 
     t: np.ndarray  # (N,)
     y: np.ndarray  # (N, nstate): q, u, then the works W_normal[, W_friction]; rows are samples
-    phase: "np.ndarray | PhaseRuns"  # (N,) phase name of the step that ended at each sample
+    phase: "np.ndarray | Callable[[], np.ndarray]"  # (N,) phase name of the step that ended at each
+    # sample, or what makes them: few callers ask for an array of names per sample
     outputs: Mapping[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
 
     def phase_labels(self) -> np.ndarray:
-        """`phase` as an array (runs are expanded once, on first use)."""
-        if isinstance(self.phase, PhaseRuns):
-            self.phase = self.phase.expand()
+        """`phase` as an array (made once, on first use)."""
+        if callable(self.phase):
+            self.phase = self.phase()
         return self.phase
 
-
-@dataclass
-class PhaseRuns:
-    """Phase labels as runs, labels[j] for counts[j] samples: what a run knows without
-    building an array of names per sample, which few callers ask for."""
-
-    labels: list[str]
-    counts: list[int]
-
-    def expand(self) -> np.ndarray:
-        return np.repeat(np.array(self.labels), self.counts)
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled as plain data: the phase names made first (what makes them may hold C objects)."""
+        self.phase_labels()
+        return self.__dict__
 
 
 class Columns(Mapping):
@@ -229,21 +223,25 @@ class SimulationResult:
     message: str
     trajectory: Trajectory  # every step: what the summaries are computed from
     phases: list[PhaseSpan]
-    impacts: list[Impact]
+    impact_records: list[Impact]  # as the engine recorded them: their energies wait for `impacts`
     stats: dict[str, Any]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
     tallied: tuple[Tallied, Tallied] | None = None  # the C engine's summaries (run, first impact)
 
-    def __post_init__(self) -> None:
-        _fill_impact_energies(self.trajectory, self.n, self.impacts)
+    @computed_once
+    def impacts(self) -> list[Impact]:
+        """The impacts, their energies read from the samples on first use (the summaries and
+        the warnings need none of them: a sweep never reads them)."""
+        _fill_impact_energies(self.trajectory, self.n, self.impact_records)
+        return self.impact_records
 
     @computed_once
     def first_impact(self) -> dict[str, Any]:
         """The first impact (MODEL section 6), computed on first use and kept."""
         if self.tallied is not None:
-            return _from_tally(self.tallied[1], self.n, self.impacts)
+            return _from_tally(self.tallied[1], self.n, self.impact_records)
         return _first_impact_summary(self)
 
     @computed_once
@@ -251,7 +249,7 @@ class SimulationResult:
         """The run (for a run to separation, its first impact), computed on first use and kept."""
         if self._to_separation():
             return self.first_impact
-        return _run_summary(self) if self.tallied is None else _from_tally(self.tallied[0], self.n, self.impacts)
+        return _run_summary(self) if self.tallied is None else _from_tally(self.tallied[0], self.n, self.impact_records)
 
     @property
     def summary_tallied(self) -> Tallied | None:
@@ -351,7 +349,7 @@ class SimulationResult:
         else:
             summary = self.summary
             budget = (summary["T0"], summary["Tf"], *(summary["energy"][k] for k in ENERGY_TERMS))
-        return validity_warnings(self.scene, self.impacts, self.contact) + energy_warning(self.scene, *budget)
+        return validity_warnings(self.scene, self.impact_records, self.contact) + energy_warning(self.scene, *budget)
 
     def impacts_frame(self):
         """The impacts as a pandas DataFrame, one row per impact (units in `IMPACT_UNITS`).
@@ -415,10 +413,6 @@ def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> 
     return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g, "residual": (Tf - T0) - (W_n + W_f + W_g)}
 
 
-def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
-    return [{"t": t, "from": a, "to": b} for t, a, b in items]
-
-
 def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
     """The first impact as MODEL section 6 lists it, with its energy budget (the whole run
     when there was no impact). An impact the run ended in has t_contact 0."""
@@ -469,19 +463,19 @@ ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy
 def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     """A summary dict (MODEL section 6) from its values (as the C engine tallies them, or as
     `_summary` computes them from the samples); the lists of the first impact's switches
-    from its record. NaN (nothing to report) is None here."""
+    from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
+    lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
     first = impacts[0] if impacts else None
-    y = s.y_final
-    summary = dict(zip(SUMMARY_LEADING, s))
-    if s.t_impact != s.t_impact:
-        summary["t_impact"] = None
-    summary.update(switches=_switch_list(first.switches) if first else [],
-                   stick_slip=_switch_list(first.stick_slip) if first else [],
-                   u_final=list(y[n: 2 * n]), q_final=list(y[:n]))
-    summary.update(zip(SUMMARY_LATER, (s.impacts, None if s.t_sustained != s.t_sustained else s.t_sustained,
-                                       s.t_final)))
-    summary["energy"] = dict(zip(ENERGY_TERMS, (s.W_normal, s.W_friction, s.W_gravity, s.residual)))
-    return summary
+    y, t_impact, t_sustained = s.y_final, s.t_impact, s.t_sustained
+    return {"T0": s.T0, "Tf": s.Tf, "delta_T": s.delta_T, "delta_max": s.delta_max, "delta_r": s.delta_r,
+            "P_max": s.P_max, "R_res": s.R_res, "t_contact": s.t_contact,
+            "t_impact": None if t_impact != t_impact else t_impact,
+            "switches": [{"t": t, "from": a, "to": b} for t, a, b in first.switches] if first else [],
+            "stick_slip": [{"t": t, "from": a, "to": b} for t, a, b in first.stick_slip] if first else [],
+            "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": s.impacts,
+            "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": s.t_final,
+            "energy": {"W_normal": s.W_normal, "W_friction": s.W_friction, "W_gravity": s.W_gravity,
+                       "residual": s.residual}}
 
 
 def _dent(impact: Impact) -> float:
