@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from functools import partial
+from typing import Any
 
 import numpy as np
 
@@ -74,7 +75,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     in_contact = start == lib.MODEL_START_CONTACT
     ran = session.run(params, 0.0, solver.t_end if run_to_time else solver.t_max, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, in_contact=in_contact, with_params=t_eval is not None)
-    spans, impacts = _spans_and_impacts(machine, model.event_names, ran.segments, in_contact)
+    impacts = _impacts(machine, ran.segments, in_contact)
     status, message = _status(lib, scene, machine, ran, impacts)
 
     trajectory = Trajectory(t=ran.t, y=ran.y, phase=partial(_phase_labels, ran.segments, len(ran.t), state0, m.state),
@@ -85,12 +86,14 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, m.state), params, sampler)
         if dense_output:
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
-    stats = session.stats()
+    counters = session.counters()
     if status != "failed":  # a failed integrator is not handed to the next run
         session.close(scene)
-    stats.update(segments=len(spans), samples=len(ran.t), wall_s=time.perf_counter() - started)
+    stats = partial(_stats, session.stats_names, counters, segments=len(ran.segments), samples=len(ran.t),
+                    wall_s=time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
     contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
+    spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries)
 
@@ -108,25 +111,19 @@ def _phase_labels(segments: list[Segment], n_samples: int, state0: int, state_en
     return np.repeat(np.array([STATES[s] for s in states]), [1, *np.diff(cuts)])
 
 
-def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments: list[Segment],
-                       contact_at_start: bool) -> tuple[list[PhaseSpan], list[Impact]]:
-    """The phase spans and the impacts, from the machine's record of each segment."""
-    spans: list[PhaseSpan] = []
+def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) -> list[Impact]:
+    """The impacts, from the machine's record of each segment's end."""
     impacts = [Impact(t_start=0.0, i_start=0)] if contact_at_start else []
-    lib, label, coulomb = machine.lib, machine.slip_label, machine.coulomb
+    lib, label = machine.lib, machine.slip_label
     BEGIN, SLIP, MAX_COMPRESSION, END = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP,
                                          lib.MODEL_ACT_MAX_COMPRESSION, lib.MODEL_ACT_IMPACT_END)
-    t0 = 0.0
     for seg in segments:
         phase, new_phase, t, act = STATES[seg.state], STATES[seg.next_state], seg.t, seg.act
-        slip = label(seg.state, seg.slip) if coulomb else ""
-        spans.append(PhaseSpan(phase, t0, t, event_names[seg.event] if seg.event >= 0 else "t_end", slip))
-        t0 = t
         if act & BEGIN:
             impacts.append(Impact(t_start=t, i_start=seg.sample))
         impact = impacts[-1] if impacts else None
         if act & SLIP:
-            impact.stick_slip.append((t, slip, label(seg.next_state, seg.next_slip)))
+            impact.stick_slip.append((t, label(seg.state, seg.slip), label(seg.next_state, seg.next_slip)))
         if act & MAX_COMPRESSION:
             impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = (
                 seg.delta_max, seg.P_max, seg.delta_r, seg.R_res)
@@ -134,7 +131,22 @@ def _spans_and_impacts(machine: Machine, event_names: tuple[str, ...], segments:
             impact.switches.append((t, phase, new_phase))
         if act & END:
             impact.t_end, impact.i_end = t, seg.sample
-    return spans, impacts
+    return impacts
+
+
+def _spans(machine: Machine, event_names: tuple[str, ...], segments: list[Segment]) -> list[PhaseSpan]:
+    """The phase spans, one per segment: made when first asked for (a summary needs none)."""
+    spans, t0, label = [], 0.0, machine.slip_label
+    for seg in segments:
+        event = event_names[seg.event] if seg.event >= 0 else "t_end"
+        spans.append(PhaseSpan(STATES[seg.state], t0, seg.t, event, label(seg.state, seg.slip)))
+        t0 = seg.t
+    return spans
+
+
+def _stats(names: tuple[str, ...], counters: tuple[int, ...], **more: Any) -> dict[str, Any]:
+    """The integrator's counters by name, then `more` (made when first asked for)."""
+    return {**dict(zip(names, counters)), **more}
 
 
 def _status(lib, scene: Scene, machine: Machine, ran: MachineRun, impacts: list[Impact]) -> tuple[str, str]:

@@ -222,13 +222,30 @@ class SimulationResult:
     status: str
     message: str
     trajectory: Trajectory  # every step: what the summaries are computed from
-    phases: list[PhaseSpan]
+    spans: "list[PhaseSpan] | Callable[[], list[PhaseSpan]]"  # `phases`, or what makes them on first use
     impact_records: list[Impact]  # as the engine recorded them: their energies wait for `impacts`
-    stats: dict[str, Any]
+    counters: "dict[str, Any] | Callable[[], dict[str, Any]]"  # `stats`, or what makes them on first use
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
     tallied: tuple[Tallied, Tallied] | None = None  # the C engine's summaries (run, first impact)
+
+    @computed_once
+    def phases(self) -> list[PhaseSpan]:
+        """The phase spans (made on first use: the summaries and warnings need none)."""
+        return self.spans() if callable(self.spans) else self.spans
+
+    @computed_once
+    def stats(self) -> dict[str, Any]:
+        """Integrator counters and the wall time (named on first use)."""
+        return self.counters() if callable(self.counters) else self.counters
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled as plain data: what is made on first use is made first (what makes it may
+        hold C objects)."""
+        state = dict(self.__dict__)
+        state["spans"], state["counters"] = self.phases, self.stats
+        return state
 
     @computed_once
     def impacts(self) -> list[Impact]:

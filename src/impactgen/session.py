@@ -129,7 +129,7 @@ class CvodeSession:
         self._stats = ffi.new("ig_stats *")
         self._stats_bytes = ffi.buffer(self._stats)
         self._stats_record = struct.Struct("=" + record_layout(ffi, "ig_stats"))
-        self._stats_names = tuple(name for name, _ in ffi.typeof("ig_stats").fields)
+        self.stats_names = tuple(name for name, _ in ffi.typeof("ig_stats").fields)
         self.tally = ffi.new("ig_tally *")
         self.summaries = ffi.new("ig_summary[2]")  # the run's, its first impact's
         self._summary_args = (self.tally, self.summaries, self.summaries + 1)
@@ -256,9 +256,11 @@ class CvodeSession:
                              ffi.from_buffer("double[]", out))
         return out
 
-    def stats(self) -> dict[str, int]:
+    def counters(self) -> tuple[int, ...]:
+        """The solver's counters now, in the order of ig_stats (`stats_names`)."""
         self.model.lib.ig_solver_stats(self.solver, self._stats)
-        return dict(zip(self._stats_names, self._stats_record.unpack_from(self._stats_bytes)))
+        return self._stats_record.unpack_from(self._stats_bytes)
+
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
