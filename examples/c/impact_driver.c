@@ -34,9 +34,10 @@ typedef struct {
     ig_summary summary;  /* the run's (to a time) or its first impact's (to separation) */
 } run_result;
 
-/* One run of the scene from its start, on solver s (created, or reset, with the scene's
- * tolerances): the phase machine's loop in one call (ig_run), its summary tallied on the
- * way (ig_summarize), as impactgen's Python wrapper does. Only segment ends are sampled. */
+/* One run of the scene from its start on solver s: begun (ig_run_begin: the machine started,
+ * the solver reset with the scene's tolerances), then the phase machine's loop in one call
+ * (ig_run), its summary tallied on the way (ig_summarize), as impactgen's Python wrapper
+ * does. Only segment ends are sampled. */
 static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_result *r)
 {
     double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE], out_buf[CAPACITY * MODEL_NOUT];
@@ -49,16 +50,13 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
     r->status = "ok";
     r->t = 0.0;
     memcpy(r->y, y0, sizeof r->y);
-    const int start = model_machine_start(&m, &p, r->t, r->y, MODEL_SCENE_RUN_TO_TIME);
-    ig_outputs(&p, 1, &r->t, r->y, out_buf);
-    ig_tally_begin(&tally, r->t, r->y, out_buf, start == MODEL_START_CONTACT);
-    if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) {
-        r->status = "no-impact";
+    const int start = ig_run_begin(s, &m, &p, r->t, r->y, MODEL_SCENE_RUN_TO_TIME, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL,
+                                   MODEL_SCENE_MAX_STEPS, atol, t_buf, y_buf, out_buf, &tally);
+    if (start == MODEL_START_ALONG || start == MODEL_START_AWAY || start < 0) {
+        r->status = start < 0 ? "failed" : "no-impact";
         ig_summarize(&tally, &r->summary, &first);
         return;
     }
-    model_machine_atol(&m, &p, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL, atol);
-    ig_solver_set_atol(s, atol);
     long begun = 0;
     for (;;) {
         int n = 0, n_segments = 0;
@@ -101,13 +99,10 @@ int main(int argc, char **argv)
     run_scene(s, &p, y0, &r);
     ig_stats stats;
     ig_solver_stats(s, &stats);
-    if (repeat > 0) {  /* warm runs, each from a reset solver (as a warm Python process reuses one) */
+    if (repeat > 0) {  /* warm runs on the same solver, each reset by ig_run_begin (as a warm Python process reuses one) */
         struct timespec a, b;
         clock_gettime(CLOCK_MONOTONIC, &a);
-        for (long k = 0; k < repeat; ++k) {
-            ig_solver_reset(s, MODEL_SCENE_RTOL, atol, MODEL_SCENE_MAX_STEPS);
-            run_scene(s, &p, y0, &r);
-        }
+        for (long k = 0; k < repeat; ++k) run_scene(s, &p, y0, &r);
         clock_gettime(CLOCK_MONOTONIC, &b);
         printf("ms_per_run %.6f\n", ((b.tv_sec - a.tv_sec) * 1e3 + (b.tv_nsec - a.tv_nsec) * 1e-6) / (double)repeat);
     }

@@ -58,23 +58,18 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     machine = Machine(model, session)
     m = machine.state
     solver = scene.solver
-    y = session.y0
-    y[:] = scene.q0 + scene.u0 + session.works_at_start
-    run_to_time = solver.t_end is not None
-    start = lib.model_machine_start(m, params, 0.0, session.y0_c, int(run_to_time))
+    polynomials = dense_output or t_eval is not None
+    session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
+    start = session.begin(params, scene)
     state0 = m.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
-        first_row, tallied = session.without_run(params, 0.0)
+        first_row, tallied = session.without_run()
         session.close(scene)
-        return _no_impact_at_start(scene, model, y.copy(), first_row.tolist(), start == lib.MODEL_START_ALONG,
-                                   started, tallied)
-    lib.model_machine_atol(m, params, solver.rtol, solver.atol, session.atol_now)
-    session.reset(scene)
-    polynomials = dense_output or t_eval is not None
-    session.keep_polynomials(polynomials)
+        return _no_impact_at_start(scene, model, session.y0.copy(), first_row.tolist(),
+                                   start == lib.MODEL_START_ALONG, started, tallied)
     in_contact = start == lib.MODEL_START_CONTACT
-    ran = session.run(params, 0.0, solver.t_end if run_to_time else solver.t_max, solver.atol, MAX_SEGMENTS,
-                      every_step=record_steps or polynomials, in_contact=in_contact, with_params=t_eval is not None)
+    ran = session.run(params, solver.t_max if solver.t_end is None else solver.t_end, solver.atol, MAX_SEGMENTS,
+                      every_step=record_steps or polynomials, with_params=t_eval is not None)
     impacts = _impacts(machine, ran.segments, in_contact)
     status, message = _status(lib, scene, machine, ran, impacts)
 

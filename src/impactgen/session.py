@@ -94,7 +94,7 @@ class CvodeSession:
 
     @classmethod
     def open(cls, model: CompiledModel, scene: Scene) -> "CvodeSession":
-        """An idle session of this model and method, or a new one; `reset` it before a run."""
+        """An idle session of this model and method, or a new one; `begin` a run on it."""
         try:
             return cls._idle.get(cls._pool_key(model, scene), []).pop()
         except IndexError:
@@ -109,13 +109,13 @@ class CvodeSession:
         ffi = model.ffi
         self.method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5, _AUTO
         self.analytic = 1 if uses_jacobian(model, scene) else 0
-        self.solver = None  # made by the first reset, which knows the tolerances
         self.capacity = FIRST_BUFFER
-        self.dense_terms = 0
         self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
         # the run's arguments, allocated once
         self.machine = ffi.new("model_machine *")
         self.atol_now = ffi.new("double[]", model.nstate)
+        self.solver = self._new_solver(scene)
+        self.dense_terms = int(model.lib.ig_dense_terms(self.solver))
         self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
         self._segment_bytes = ffi.buffer(self.segments)
         self._segment_record = struct.Struct("=" + record_layout(ffi, "ig_segment", ("params",)))
@@ -135,23 +135,32 @@ class CvodeSession:
         self._summary_args = (self.tally, self.summaries, self.summaries + 1)
         self._summary_bytes = ffi.buffer(self.summaries)
         self._summary_record = summary_record(ffi)
-
-    def reset(self, scene: Scene) -> None:
-        """Prepare the integrator for a run with the scene's tolerances (the absolute ones
-        the started machine asks for, in `atol_now`)."""
-        ffi, lib = self.model.ffi, self.model.lib
-        rtol, max_steps = scene.solver.rtol, scene.solver.max_steps
-        if self.solver is not None:
-            if lib.ig_solver_reset(self.solver, rtol, self.atol_now, max_steps) != 0:
-                raise SolverError(f"cannot reset the CVODE solver: {self._message()}")
-            return
-        err = ffi.new("char[]", 512)
-        solver = lib.ig_solver_new(self.method, self.analytic, rtol, self.atol_now, max_steps, err, 512)
-        if solver == ffi.NULL:
-            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
-        self.solver = ffi.gc(solver, lib.ig_solver_free)
-        self.dense_terms = int(lib.ig_dense_terms(self.solver))
         self._alloc()
+
+    def _new_solver(self, scene: Scene):
+        """The integrator, made with the scene's tolerances (each run's `begin` resets them)."""
+        ffi, lib, solver = self.model.ffi, self.model.lib, scene.solver
+        self.atol_now[0:self.model.nstate] = [solver.atol] * self.model.nstate
+        err = ffi.new("char[]", 512)
+        made = lib.ig_solver_new(self.method, self.analytic, solver.rtol, self.atol_now, solver.max_steps, err, 512)
+        if made == ffi.NULL:
+            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
+        return ffi.gc(made, lib.ig_solver_free)
+
+    def begin(self, params, scene: Scene) -> int:
+        """Start the machine at the scene's initial state, at t = 0, under `params` (which
+        the run goes on with): sample 0 and the tally begun there, and, when an impact can
+        follow, the integrator reset with the scene's tolerances as the machine scales them
+        (ig_run_begin). Returns the machine's MODEL_START_*."""
+        self.y0[:] = scene.q0 + scene.u0 + self.works_at_start
+        solver = scene.solver
+        self.t_now[0] = 0.0
+        start = self.model.lib.ig_run_begin(self.solver, self.machine, params, 0.0, self.y0_c,
+                                            solver.t_end is not None, solver.rtol, solver.atol, solver.max_steps,
+                                            self.atol_now, self.t_buf, self.y_buf, self.out_buf, self.tally)
+        if start < 0:
+            raise SolverError(f"cannot reset the CVODE solver: {self._message()}")
+        return start
 
     def _alloc(self) -> None:
         ffi = self.model.ffi
@@ -174,17 +183,14 @@ class CvodeSession:
             self.dense = dense
             self._alloc()
 
-    def run(self, params, t0: float, t_stop: float, atol: float, max_segments: int, every_step: bool,
-            in_contact: bool, with_params: bool = False) -> "MachineRun":
-        """Run the phase machine (`machine`, started from (t0, `y0`)) to t_stop in C (ig_run),
-        one call per buffer's worth: every step a sample when `every_step`, else only each
-        segment's end. The samples begin with (t0, y0) as sample 0, its outputs under
-        `params`; `in_contact`: the run starts with an impact. `with_params` keeps a copy of
-        each segment's parameters (to evaluate outputs between its samples). The run's
-        summaries are tallied in C on the way."""
+    def run(self, params, t_stop: float, atol: float, max_segments: int, every_step: bool,
+            with_params: bool = False) -> "MachineRun":
+        """Run the phase machine (`machine`, started by `begin`) to t_stop in C (ig_run), one
+        call per buffer's worth: every step a sample when `every_step`, else only each
+        segment's end. The samples begin with the start, sample 0. `with_params` keeps a
+        copy of each segment's parameters (to evaluate outputs between its samples). The
+        run's summaries are tallied in C on the way."""
         ffi, lib = self.model.ffi, self.model.lib
-        self._first_sample(params, t0, in_contact)
-        self.t_now[0] = t0
         dense = self.dense and every_step
         if dense:
             self.d_samples[0] = 0.0  # the start ends no step: it has no polynomial
@@ -214,14 +220,6 @@ class CvodeSession:
         message = self._message() if flag < 0 else ""
         return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]), self._summarized())
 
-    def _first_sample(self, params, t0: float, in_contact: bool) -> None:
-        """Write sample 0, (t0, y0) with its outputs, and begin the run's tally there."""
-        self.t_samples[0] = t0
-        self.y_samples[0] = self.y0
-        lib = self.model.lib
-        lib.ig_outputs(params, 1, self.t_buf, self.y_buf, self.out_buf)
-        lib.ig_tally_begin(self.tally, t0, self.y_buf, self.out_buf, in_contact)
-
     def _summarized(self) -> tuple[Tallied, Tallied]:
         self.model.lib.ig_summarize(*self._summary_args)
         values = self._summary_record.unpack_from(self._summary_bytes)  # both records, one call
@@ -229,12 +227,10 @@ class CvodeSession:
         make = Tallied._make  # tuple.__new__: the class call would cost a microsecond more each
         return make(values[:Y_FINAL] + (values[Y_FINAL:k],)), make(values[k:k + Y_FINAL] + (values[k + Y_FINAL:],))
 
-    def without_run(self, params, t0: float) -> tuple[np.ndarray, tuple[Tallied, Tallied]]:
-        """The outputs at (t0, y0), and the summaries of a run that ends where it begins (the
-        tip touches the surface without pressing in: no impact)."""
-        out = self.outputs(params, np.array([t0]), self.y0[None, :])
-        self.model.lib.ig_tally_begin(self.tally, t0, self.y0_c, self.model.ffi.from_buffer("double[]", out), False)
-        return out[0], self._summarized()
+    def without_run(self) -> tuple[np.ndarray, tuple[Tallied, Tallied]]:
+        """The outputs at the start, and the summaries of a run that ends where it begins
+        (the tip touches the surface without pressing in: no impact)."""
+        return self.out_samples[0].copy(), self._summarized()
 
     def _segments(self, base: int, with_params: bool) -> list[Segment]:
         """The segment records of the last ig_run call, their sample indices from `base` on."""

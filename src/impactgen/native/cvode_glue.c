@@ -767,6 +767,21 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
     }
 }
 
+int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, const double *y0, int run_to_time,
+                 double rtol, double atol, long max_steps, double *atol_now,
+                 double *t_buf, double *y_buf, double *out_buf, ig_tally *tally)
+{
+    memcpy(y_buf, y0, sizeof(double) * MODEL_NSTATE);
+    t_buf[0] = t0;
+    const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
+    model_outputs(t0, y_buf, out_buf, p);
+    ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
+    if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
+    model_machine_atol(m, p, rtol, atol, atol_now);
+    const int flag = ig_solver_reset(s, rtol, atol_now, max_steps);
+    return flag != 0 ? flag : start;
+}
+
 int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
            double atol, long max_segments, int every_step,
            double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,

@@ -171,7 +171,19 @@ void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *
  * impact still in contact has no contact time). A run to separation reports the second. */
 void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impact);
 
-/* Run the phase machine m (started with model_machine_start) under p from (*t, y) to
+/* Begin a run of the phase machine m under p at (t0, y0), as every caller of ig_run does:
+ * start the machine (model_machine_start, run_to_time as there), write sample 0 (t_buf[0],
+ * the rows y_buf and out_buf: the state and its outputs) and begin the tally there, and,
+ * when an impact can follow, make the solver ready for the run (ig_solver_reset) with rtol,
+ * max_steps and the absolute tolerances the machine asks for from the scene's atol (written
+ * to atol_now). One call where a caller from Python would cross into C five times. Returns
+ * model_machine_start's MODEL_START_* (with MODEL_START_ALONG or MODEL_START_AWAY the solver
+ * is left as it was: there is no run), or IG_ERR_USAGE for tolerances the solver refuses. */
+int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, const double *y0, int run_to_time,
+                 double rtol, double atol, long max_steps, double *atol_now,
+                 double *t_buf, double *y_buf, double *out_buf, ig_tally *tally);
+
+/* Run the phase machine m (begun with ig_run_begin) under p from (*t, y) to
  * t_stop: each segment integrated until one of the events the machine watches, the switch
  * there, the next segment, with the tolerances the machine asks for (atol: the scene's
  * absolute tolerance; the relative one is the solver's) and the analytic Jacobian only
