@@ -172,10 +172,6 @@ class CvodeSession:
         self.out_buf = ffi.from_buffer("double[]", self.out_samples)
         self.d_samples = np.empty((self.capacity, self.dense_terms, self.model.nstate)) if self.dense else None
         self.d_buf = ffi.from_buffer("double[]", self.d_samples) if self.dense else ffi.NULL
-        nstate, nout = self.model.nstate, len(self.model.output_names)
-        self.buffers = (self.t_buf, self.y_buf, self.out_buf, self.d_buf)
-        self.after_start = (self.t_buf + 1, self.y_buf + nstate, self.out_buf + nout,  # row 0 is the start
-                            self.d_buf + self.dense_terms * nstate if self.dense else ffi.NULL)
 
     def keep_polynomials(self, dense: bool) -> None:
         """Ask for (or stop asking for) each step's Taylor coefficients from the next segment on."""
@@ -196,18 +192,19 @@ class CvodeSession:
             self.d_samples[0] = 0.0  # the start ends no step: it has no polynomial
         chunks: list[tuple[np.ndarray, ...]] = []
         segments: list[Segment] = []
-        base, skip = 0, 1  # samples before this call; the first call writes after the start's row
+        base = 0  # samples before this call's buffers
+        self.n_out[0] = 1  # the start, written by begin
         while True:
-            t_buf, y_buf, out_buf, d_buf = self.after_start if skip else self.buffers
             flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, atol,
-                              max_segments - len(segments), every_step, t_buf, y_buf, out_buf,
-                              d_buf if dense else ffi.NULL, self.capacity - skip, self.n_out, self.segments,
+                              max_segments - len(segments), every_step, self.t_buf, self.y_buf, self.out_buf,
+                              self.d_buf if dense else ffi.NULL, self.capacity, self.n_out, self.segments,
                               SEGMENT_CAPACITY, self.n_segments, self.tally)
-            k = self.n_out[0] + skip
+            k = self.n_out[0]
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            segments.extend(self._segments(base + skip, with_params))
-            base, skip = base + k, 0
+            segments.extend(self._segments(base, with_params))
+            base += k
+            self.n_out[0] = 0
             if flag == lib.IG_BUFFER_FULL and every_step:
                 self.capacity *= 2
                 self._alloc()
@@ -237,11 +234,11 @@ class CvodeSession:
         count = self.n_segments[0]
         rows = self._segment_record.iter_unpack(self._segment_bytes[:count * self._segment_record.size])
         make = Segment._make
-        if not with_params:
-            return [make((r[0], base + r[1]) + r[2:] + (None,)) for r in rows]
+        if not with_params and not base:  # the common case: the records as they are
+            return [make(r + (None,)) for r in rows]
         new = self.model.ffi.new
-        return [make((r[0], base + r[1]) + r[2:] + (new("model_params *", self.segments[j].params),))
-                for j, r in enumerate(rows)]
+        return [make((r[0], base + r[1]) + r[2:] + (new("model_params *", self.segments[j].params) if with_params
+                                                      else None,)) for j, r in enumerate(rows)]
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model

@@ -700,10 +700,10 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
     int roots_found[MODEL_NEVENT];
     double atol_now[MODEL_NSTATE];
     long begun = 0;
-    *n_written = 0;
     *n_segments = 0;
-    if (capacity < 1 || segment_capacity < 1) {
-        set_message(s, "ig_run: the buffers must hold at least one sample and one segment");
+    if (capacity < 1 || segment_capacity < 1 || *n_written < 0 || *n_written >= capacity) {
+        set_message(s, "ig_run: the buffers must have room for a sample and a segment (*n_written: "
+                       "the samples already in them, 0 for emptied buffers)");
         return IG_ERR_USAGE;
     }
     for (;;) {

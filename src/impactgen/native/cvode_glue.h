@@ -191,9 +191,13 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
  * under the segment's parameters: every step when every_step is 1 (dense_buf, if not NULL,
  * as ig_segment_advance), else only each segment's end (no dense output). Returns
  * IG_RUN_DONE when the machine ends the run, IG_REACHED_END at t_stop, IG_BUFFER_FULL or
- * IG_SEGMENTS_FULL when capacity samples or segment_capacity segments are written (call
- * again with emptied buffers to continue), or < 0 on a failure (ig_solver_message says
- * why; the samples up to it are written). At most max_segments segments begin in one call.
+ * IG_SEGMENTS_FULL when the buffers hold capacity samples or segment_capacity segments are
+ * written (call again with emptied buffers to continue), or < 0 on a failure
+ * (ig_solver_message says why; the samples up to it are written). *n_written: the samples
+ * already in the buffers on entry (1 after ig_run_begin wrote the start; 0 in emptied
+ * buffers), written after, and less than capacity (IG_ERR_USAGE otherwise); on return,
+ * the samples in them (segments[k].sample indexes them). At most max_segments segments
+ * begin in one call.
  * tally, if not NULL (begun with ig_tally_begin), follows the run for ig_summarize. */
 int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
            double atol, long max_segments, int every_step,
