@@ -59,6 +59,15 @@ def test_a_result_pickles_with_its_summary_and_warnings():
     again = pickle.loads(pickle.dumps(result))
     assert again.summary == result.summary and again.warnings == result.warnings
     assert any("contact radius" in w for w in again.warnings)
+    # what a result makes on first use (spans, counters, phase names, impact energies) is
+    # made before it is pickled: its makers hold the run's C records (t_eval's parameters)
+    sampled = impactgen.simulate(hard, t_eval=[0.0, 1e-4, 2e-4])
+    again = pickle.loads(pickle.dumps(sampled))
+    assert again.phases == sampled.phases and again.stats == sampled.stats
+    assert list(again.phase) == list(sampled.phase) and list(again.trajectory.phase_labels()) == list(
+        sampled.trajectory.phase_labels())
+    assert [i.to_dict() for i in again.impacts] == [i.to_dict() for i in sampled.impacts]
+    assert math.isfinite(again.impacts[0].T_before) and again.stats["segments"] == len(again.phases)
 
 
 def test_whole_run_budget_closes_and_reports_the_end_state(bouncing):
