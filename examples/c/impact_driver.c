@@ -52,6 +52,7 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
     memcpy(r->y, y0, sizeof r->y);
     const int start = ig_run_begin(s, &m, &p, r->t, r->y, MODEL_SCENE_RUN_TO_TIME, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL,
                                    MODEL_SCENE_MAX_STEPS, atol, t_buf, y_buf, out_buf, &tally);
+    if (start < 0) fprintf(stderr, "cannot begin the run: %s\n", ig_solver_message(s));
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY || start < 0) {
         r->status = start < 0 ? "failed" : "no-impact";
         ig_summarize(&tally, &r->summary, &first);

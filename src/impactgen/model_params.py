@@ -17,9 +17,10 @@ from .scene import Scene
 
 @lru_cache(maxsize=64)
 def _readers(ffi, links: int) -> tuple[struct.Struct, tuple[tuple[object, int], ...]]:
-    """The fields of a model's struct that a scene sets: their (reader, link) in struct
-    order, and the layout that writes their values into the struct in one call (the loop
-    of `fill_params`, made once per model (its ffi); a field at a time costs a C crossing each)."""
+    """The fields of a model's struct (its ffi) that a scene sets: their (reader, link) in
+    struct order, and the layout that writes their values into the struct in one call. Made
+    once per model: `fill_params` runs for every simulation, and a field at a time would
+    cost a C crossing each."""
     inputs = {name: (p.read, link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
     layout, at, readers = "=", 0, []
     for name, field in sorted(ffi.typeof("model_params").fields, key=lambda item: item[1].offset):

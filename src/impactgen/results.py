@@ -72,9 +72,18 @@ class Impact:
             "delta_max": self.delta_max, "delta_r": self.delta_r, "P_max": self.P_max,
             "R_res": self.R_res, "T_before": self.T_before, "T_after": self.T_after,
             "W_normal": self.W_normal, "W_friction": self.W_friction, "W_gravity": self.W_gravity,
-            "switches": [{"t": t, "from": a, "to": b} for t, a, b in self.switches],
-            "stick_slip": [{"t": t, "from": a, "to": b} for t, a, b in self.stick_slip],
+            "switches": _switch_list(self.switches), "stick_slip": _switch_list(self.stick_slip),
         }
+
+
+def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
+    """(t, from, to) switches as the summaries and the impacts table write them."""
+    return [{"t": t, "from": a, "to": b} for t, a, b in items]
+
+
+def _made(value: Any) -> Any:
+    """`value`, or what it makes when it is a maker (a result's parts made on first use)."""
+    return value() if callable(value) else value
 
 
 IMPACT_UNITS = {"t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
@@ -94,8 +103,7 @@ class Trajectory:
 
     def phase_labels(self) -> np.ndarray:
         """`phase` as an array (made once, on first use)."""
-        if callable(self.phase):
-            self.phase = self.phase()
+        self.phase = _made(self.phase)
         return self.phase
 
     def __getstate__(self) -> dict[str, Any]:
@@ -233,12 +241,12 @@ class SimulationResult:
     @computed_once
     def phases(self) -> list[PhaseSpan]:
         """The phase spans (made on first use: the summaries and warnings need none)."""
-        return self.spans() if callable(self.spans) else self.spans
+        return _made(self.spans)
 
     @computed_once
     def stats(self) -> dict[str, Any]:
         """Integrator counters and the wall time (named on first use)."""
-        return self.counters() if callable(self.counters) else self.counters
+        return _made(self.counters)
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickled as plain data: what is made on first use is made first (what makes it may
@@ -487,8 +495,8 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     return {"T0": s.T0, "Tf": s.Tf, "delta_T": s.delta_T, "delta_max": s.delta_max, "delta_r": s.delta_r,
             "P_max": s.P_max, "R_res": s.R_res, "t_contact": s.t_contact,
             "t_impact": None if t_impact != t_impact else t_impact,
-            "switches": [{"t": t, "from": a, "to": b} for t, a, b in first.switches] if first else [],
-            "stick_slip": [{"t": t, "from": a, "to": b} for t, a, b in first.stick_slip] if first else [],
+            "switches": _switch_list(first.switches) if first else [],
+            "stick_slip": _switch_list(first.stick_slip) if first else [],
             "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": s.impacts,
             "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": s.t_final,
             "energy": {"W_normal": s.W_normal, "W_friction": s.W_friction, "W_gravity": s.W_gravity,

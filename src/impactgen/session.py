@@ -233,12 +233,12 @@ class CvodeSession:
         """The segment records of the last ig_run call, their sample indices from `base` on."""
         count = self.n_segments[0]
         rows = self._segment_record.iter_unpack(self._segment_bytes[:count * self._segment_record.size])
-        make = Segment._make
-        if not with_params and not base:  # the common case: the records as they are
-            return [make(r + (None,)) for r in rows]
+        if base:
+            rows = [(r[0], base + r[1]) + r[2:] for r in rows]
         new = self.model.ffi.new
-        return [make((r[0], base + r[1]) + r[2:] + (new("model_params *", self.segments[j].params) if with_params
-                                                      else None,)) for j, r in enumerate(rows)]
+        params = [new("model_params *", self.segments[j].params) for j in range(count)] if with_params else None
+        make = Segment._make
+        return [make(r + (params[j] if params else None,)) for j, r in enumerate(rows)]
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
@@ -253,7 +253,6 @@ class CvodeSession:
         """The solver's counters now, in the order of ig_stats (`stats_names`)."""
         self.model.lib.ig_solver_stats(self.solver, self._stats)
         return self._stats_record.unpack_from(self._stats_bytes)
-
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
