@@ -76,3 +76,20 @@ def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
     assert len(auto.impacts) == len(bdf.impacts)
     assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-4)
     assert abs(auto.summary["energy"]["residual"]) < 1e-4 * auto.summary["T0"]
+
+
+@pytest.mark.parametrize("mu, eps", [(1.0, 1e-9), (3.0, 1e-10)])
+def test_auto_hands_over_a_stuck_tip_that_hairers_test_misses(mu, eps):
+    """A stuck tip under steep regularized friction holds the pair's steps at 3e-12 to 6e-12 s
+    while Hairer's estimate of h |lambda| stays below its boundary: without a limit the pair
+    ran out of max_steps. "auto" hands such a segment to BDF after a bounded number of steps,
+    and the impact agrees with BDF at tight tolerances."""
+    scene = impactgen.load_scene("paper", overrides={"contact.friction": mu, "contact.friction_eps": eps})
+    rk = impactgen.simulate(scene, method="dopri5", max_steps=20_000)
+    assert not rk.success and "max_steps" in rk.message and rk.stats["nstiff"] == 0
+    auto = impactgen.simulate(scene, method="auto")
+    assert auto.success, auto.message
+    assert auto.stats["nstiff"] >= 1 and auto.stats["nsteps"] < 5000 and not auto.warnings
+    reference = impactgen.simulate(scene, method="bdf", rtol=1e-12, atol=1e-14)
+    for key in ("delta_T", "delta_r", "t_contact"):
+        assert auto.summary[key] == pytest.approx(reference.summary[key], rel=1e-5), key

@@ -48,7 +48,7 @@ typedef struct {
     long netfails;   /* error test failures */
     long nnlsfails;  /* nonlinear convergence failures */
     long ngev;       /* root function calls */
-    long nstiff;     /* method auto: segments the explicit pair found stiff and BDF finished */
+    long nstiff;     /* method auto: segments the explicit pair handed to BDF (stiff, or too long) */
 } ig_stats;
 
 /* method: IG_METHOD_BDF, IG_METHOD_ADAMS (CVODE), IG_METHOD_ERK (ARKODE ERKStep, Dormand and
