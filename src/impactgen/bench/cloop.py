@@ -1,6 +1,6 @@
 """The pure-C loop (examples/c/impact_driver.c) against the Python API over the same impacts,
 and the C engine's instructions per step, by contact phase, and where they go (valgrind's
-callgrind, when installed).
+callgrind, when installed), with the API's instructions per call beside the C loop's.
 
 Speed targets of the speed issue need a floor to compare with: the same generated model,
 phase machine and CVODE glue, driven by a C loop with no Python. The driver is built from
@@ -9,6 +9,7 @@ package without it reports the figures as not measured.
 """
 from __future__ import annotations
 
+import os
 import shutil
 import statistics
 import subprocess
@@ -24,6 +25,7 @@ PY_BLOCK = 200  # warm runs per block of the Python API
 PY_BLOCKS = 7  # blocks per timing of the Python API: their median, about as long as the C loop's
 PY_WARM = 50  # runs before each timing (the model loaded, the integrator pooled)
 ROUNDS = 5  # C and Python alternated this many times; medians
+API_CALLS = 300  # calls of the Python API counted by callgrind (about 20 s under valgrind)
 
 
 def _build(scene, folder: Path) -> Path:
@@ -95,11 +97,32 @@ def _instructions_per_step(driver: Path, folder: Path) -> dict:
 
 
 def _callgrind(driver: Path, out: Path, repeat: int, *options: str) -> str:
-    res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *options, str(driver),
-                          "--repeat", str(repeat)], capture_output=True, text=True)
+    return _under_callgrind([*options, str(driver), "--repeat", str(repeat)], out)
+
+
+def _under_callgrind(command: list[str], out: Path, env: dict | None = None) -> str:
+    """Run `command` (callgrind's options first) under callgrind, its counts to `out`; its stdout."""
+    res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *command],
+                         capture_output=True, text=True, env=env)
     if res.returncode != 0:
         raise RuntimeError(f"callgrind failed: {res.stderr.strip()[-200:]}")
     return res.stdout
+
+
+def _api_instructions(scene_name: str, folder: Path) -> dict:
+    """callgrind's instructions per call of the Python API, by `_python_ms`'s loop run for
+    one call and for one plus API_CALLS, differenced (start-up and the first call's pools
+    cancel): the API's cost beside the C loop's in a count the host's load cannot move.
+    numpy's OpenBLAS gets no thread pool: its idle threads spin a varying while after
+    start-up, and callgrind counts their instructions (300 calls read 620 to 715 thousand
+    instructions each with the pool, 668 thousand to within 0.1 thousand without it)."""
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONHASHSEED": "0"}
+    counts = {}
+    for calls in (1, 1 + API_CALLS):
+        out = folder / f"callgrind.api.{calls}"
+        _under_callgrind([sys.executable, "-c", _PYTHON_LOOP, scene_name, str(RTOL), str(calls), "1", "1"], out, env)
+        counts[calls] = _instructions(out)
+    return {"api_instructions_per_run": (counts[1 + API_CALLS] - counts[1]) / API_CALLS}
 
 
 def _instructions(dump: Path) -> int:
@@ -192,6 +215,8 @@ def c_loop(scene_name: str = "paper") -> dict:
             try:
                 result.update(_instructions_by_phase(driver, folder, _segment_steps(scene)))
                 result.update(_where_instructions_go(driver, folder))
+                result.update(_api_instructions(scene_name, folder))
+                result["instruction_ratio"] = result["api_instructions_per_run"] / result["instructions_per_run"]
             except (RuntimeError, OSError) as exc:
                 result["error"] = str(exc)
     return result
