@@ -54,7 +54,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         "reference": the independent pure-Python engine on scipy's solve_ivp.
     method : str, optional
         The integrator. C engine: "auto" (the scene default: the plain-C explicit pair,
-        handing a segment that turns stiff to BDF), "bdf", "adams", "erk" or "dopri5"
+        handing a segment that turns stiff, or that takes it 2000 steps, to BDF), "bdf",
+        "adams", "erk" or "dopri5"
         (default: the scene's solver.method).
         Reference engine: a solve_ivp method, "Radau" (default), "BDF", "LSODA", "DOP853"
         or "RK45".

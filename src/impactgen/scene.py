@@ -29,7 +29,7 @@ NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 CONTACT_MODELS = ("three-phase", "hertz")
 FRICTION_MODES = ("regularized", "coulomb")
 # CVODE BDF, CVODE Adams, ARKODE's explicit Runge-Kutta pair, the same pair in plain C, and that
-# pair handing a segment that turns stiff to BDF (the glue's IG_METHOD_*, in order)
+# pair handing a segment that turns stiff (or long) to BDF (the glue's IG_METHOD_*, in order)
 METHODS = ("bdf", "adams", "erk", "dopri5", "auto")
 EXPLICIT_METHODS = ("erk", "dopri5")  # no Jacobian, no Newton iteration: for the non-stiff phases
 JACOBIANS = ("auto", "analytic", "difference")
