@@ -21,7 +21,7 @@ from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Columns, Impact, PhaseSpan, SimulationResult, Tallied, Trajectory
+from .results import Columns, Impact, PhaseSpan, SimulationResult, TallyRecords, Trajectory
 from .scene import Scene
 from .session import CvodeSession, MachineRun, Segment
 from .validity import YieldScale
@@ -189,7 +189,7 @@ def _end_without_event(scene: Scene, impacts: list[Impact], phase: str) -> tuple
 
 
 def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: list[float],
-                        along: bool, started: float, tallied: tuple[Tallied, Tallied]) -> SimulationResult:
+                        along: bool, started: float, tallied: TallyRecords) -> SimulationResult:
     rate0 = 0.0 if along else first[model.output_names.index("delta_rate")]
     motion = "along" if along else "away from"
     trajectory = Trajectory(np.array([0.0]), y[None, :], np.array(["free"]),

@@ -155,6 +155,31 @@ class Tallied(NamedTuple):
     y_final: tuple[float, ...]  # q, u, then the works
 
 
+class TallyRecords:
+    """The C engine's two summaries (the run's, its first impact's) as the bytes of their C
+    records, each made a `Tallied` when first indexed: a sweep reads one of them, a
+    summary one. Pickled as the tuple of both."""
+
+    __slots__ = ("_record", "_raw", "_made")
+
+    def __init__(self, record, raw: bytes):
+        self._record, self._raw, self._made = record, raw, [None, None]  # record: a struct.Struct of one
+
+    def __getitem__(self, k: int) -> Tallied:
+        made = self._made[k]
+        if made is None:
+            values = self._record.unpack_from(self._raw, k * self._record.size)
+            cut = len(Tallied._fields) - 1  # y_final, the last field, is the rest
+            made = self._made[k] = Tallied._make(values[:cut] + (values[cut:],))
+        return made
+
+    def __len__(self) -> int:
+        return 2
+
+    def __reduce__(self):
+        return tuple, ((self[0], self[1]),)
+
+
 class computed_once:
     """functools.cached_property without the lock it takes on every first use before
     Python 3.12: a summary is read once per run, in the inner loop of a sweep."""
@@ -236,7 +261,7 @@ class SimulationResult:
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
-    tallied: tuple[Tallied, Tallied] | None = None  # the C engine's summaries (run, first impact)
+    tallied: "TallyRecords | tuple[Tallied, Tallied] | None" = None  # the C engine's summaries (run, first impact)
 
     @computed_once
     def phases(self) -> list[PhaseSpan]:

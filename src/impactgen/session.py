@@ -15,12 +15,11 @@ import numpy as np
 
 from .build import CompiledModel
 from .errors import SolverError
-from .results import Tallied
+from .results import Tallied, TallyRecords
 from .scene import EXPLICIT_METHODS, METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
-Y_FINAL = Tallied._fields.index("y_final")
 
 
 class Segment(NamedTuple):
@@ -58,12 +57,12 @@ def record_layout(ffi, ctype: str, skip: tuple[str, ...] = ()) -> str:
 
 
 def summary_record(ffi) -> struct.Struct:
-    """Two ig_summary records read in one call, as Python values in Tallied's order (which
-    mirrors the C struct's, y_final last: checked here, once per session)."""
+    """An ig_summary record read as Python values in Tallied's order (which mirrors the C
+    struct's, y_final last: checked here, once per session)."""
     fields = ffi.typeof("ig_summary").fields
     if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
         raise AssertionError(f"results.Tallied does not mirror cvode_glue.h's ig_summary: {fields}")
-    return struct.Struct("=" + record_layout(ffi, "ig_summary") * 2)
+    return struct.Struct("=" + record_layout(ffi, "ig_summary"))
 
 
 class MachineRun(NamedTuple):
@@ -78,7 +77,7 @@ class MachineRun(NamedTuple):
     flag: int
     message: str
     t_last: float
-    summaries: tuple[Tallied, Tallied]  # over the whole run, over its first impact (ig_summarize)
+    summaries: TallyRecords  # over the whole run, over its first impact (ig_summarize)
 
 
 class CvodeSession:
@@ -217,14 +216,13 @@ class CvodeSession:
         message = self._message() if flag < 0 else ""
         return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]), self._summarized())
 
-    def _summarized(self) -> tuple[Tallied, Tallied]:
+    def _summarized(self) -> TallyRecords:
+        """The run's two summaries, tallied in C now (the session's buffers serve the next
+        run), read into Python when asked for."""
         self.model.lib.ig_summarize(*self._summary_args)
-        values = self._summary_record.unpack_from(self._summary_bytes)  # both records, one call
-        k = len(values) // 2
-        make = Tallied._make  # tuple.__new__: the class call would cost a microsecond more each
-        return make(values[:Y_FINAL] + (values[Y_FINAL:k],)), make(values[k:k + Y_FINAL] + (values[k + Y_FINAL:],))
+        return TallyRecords(self._summary_record, self._summary_bytes[:])
 
-    def without_run(self) -> tuple[np.ndarray, tuple[Tallied, Tallied]]:
+    def without_run(self) -> tuple[np.ndarray, TallyRecords]:
         """The outputs at the start, and the summaries of a run that ends where it begins
         (the tip touches the surface without pressing in: no impact)."""
         return self.out_samples[0].copy(), self._summarized()
