@@ -23,8 +23,8 @@ RTOL = 1e-8  # the speed targets' tolerance
 C_REPEATS = 2000  # warm runs per timing of the C loop
 PY_BLOCK = 200  # warm runs per block of the Python API
 PY_BLOCKS = 7  # blocks per timing of the Python API: their median, about as long as the C loop's
-PY_WARM = 50  # runs before each timing (the model loaded, the integrator pooled)
-ROUNDS = 5  # C and Python alternated this many times; medians
+PY_WARM = 50  # runs before the first timing (the model loaded, the integrator pooled)
+ROUNDS = 9  # pairs of a C timing and a Python timing back to back; the median of the pairs' ratios
 API_CALLS = 300  # calls of the Python API counted by callgrind (about 20 s under valgrind)
 
 
@@ -58,24 +58,68 @@ scene = impactgen.load_scene(sys.argv[1]).replace({"solver.rtol": float(sys.argv
 warm, block, count = (int(a) for a in sys.argv[3:6])
 for _ in range(warm):
     impactgen.simulate(scene, record_steps=False).summary
-blocks = []
-for _ in range(count):
-    started = time.perf_counter()
-    for _ in range(block):
-        impactgen.simulate(scene, record_steps=False).summary
-    blocks.append((time.perf_counter() - started) / block * 1e3)
-print(sorted(blocks)[len(blocks) // 2])
+print("ready", flush=True)
+for _ in sys.stdin:  # one timing per line asked for
+    blocks = []
+    for _ in range(count):
+        started = time.perf_counter()
+        for _ in range(block):
+            impactgen.simulate(scene, record_steps=False).summary
+        blocks.append((time.perf_counter() - started) / block * 1e3)
+    print(sorted(blocks)[len(blocks) // 2], flush=True)
 """
 
 
-def _python_ms(scene_name: str) -> float:
+class PythonLoop:
     """The Python API as a sweep calls it (summary only, without the steps), warm, in a
-    process of its own as the C loop runs in one: a process that has imported sympy to build
-    the driver pays for its objects in every garbage collection."""
-    out = subprocess.run([sys.executable, "-c", _PYTHON_LOOP, scene_name, str(RTOL), str(PY_WARM), str(PY_BLOCK),
-                          str(PY_BLOCKS)],
-                         capture_output=True, text=True, check=True)
-    return float(out.stdout.split()[-1])
+    process of its own as the C loop runs in one (a process that has imported sympy to build
+    the driver pays for its objects in every garbage collection). It stays up between
+    timings, so that each Python timing follows its C timing within milliseconds: this
+    host's speed moves by half within a second, and a pair timed a process start apart
+    (about a second) measured the host as much as the code."""
+
+    def __init__(self, scene_name: str):
+        self.process = subprocess.Popen(
+            [sys.executable, "-c", _PYTHON_LOOP, scene_name, str(RTOL), str(PY_WARM), str(PY_BLOCK), str(PY_BLOCKS)],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        if self.process.stdout.readline().strip() != "ready":
+            self.close()
+            raise RuntimeError("the Python API's timing process did not start")
+
+    def ms(self) -> float:
+        """One timing: the median of PY_BLOCKS blocks of PY_BLOCK calls, ms per call."""
+        self.process.stdin.write("\n")
+        self.process.stdin.flush()
+        return float(self.process.stdout.readline())
+
+    def close(self) -> None:
+        self.process.stdin.close()
+        self.process.wait(timeout=60)
+
+    def __enter__(self) -> "PythonLoop":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def paired_timings(driver: Path, scene_name: str) -> dict:
+    """ROUNDS pairs of a C timing and a Python timing back to back, the order swapped every
+    round (a trend in the host's speed then favours neither); the ratio is the median of the
+    pairs' ratios, as the sweep-overhead target takes it."""
+    c, py = [], []
+    with PythonLoop(scene_name) as python:
+        for k in range(ROUNDS):
+            if k % 2:
+                py.append(python.ms())
+                c.append(_c_ms(driver))
+            else:
+                c.append(_c_ms(driver))
+                py.append(python.ms())
+    ratios = [p / q for p, q in zip(py, c)]
+    return {"c_ms": statistics.median(c), "python_ms": statistics.median(py), "c_runs_ms": c, "python_runs_ms": py,
+            "pair_ratios": ratios, "ratio": statistics.median(ratios),
+            "ratio_of_medians": statistics.median(py) / statistics.median(c)}
 
 
 def _instructions_per_step(driver: Path, folder: Path) -> dict:
@@ -100,17 +144,17 @@ def _callgrind(driver: Path, out: Path, repeat: int, *options: str) -> str:
     return _under_callgrind([*options, str(driver), "--repeat", str(repeat)], out)
 
 
-def _under_callgrind(command: list[str], out: Path, env: dict | None = None) -> str:
+def _under_callgrind(command: list[str], out: Path, env: dict | None = None, stdin: str | None = None) -> str:
     """Run `command` (callgrind's options first) under callgrind, its counts to `out`; its stdout."""
     res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *command],
-                         capture_output=True, text=True, env=env)
+                         capture_output=True, text=True, env=env, input=stdin)
     if res.returncode != 0:
         raise RuntimeError(f"callgrind failed: {res.stderr.strip()[-200:]}")
     return res.stdout
 
 
 def _api_instructions(scene_name: str, folder: Path) -> dict:
-    """callgrind's instructions per call of the Python API, by `_python_ms`'s loop run for
+    """callgrind's instructions per call of the Python API, by `PythonLoop`'s script run for
     one call and for one plus API_CALLS, differenced (start-up and the first call's pools
     cancel): the API's cost beside the C loop's in a count the host's load cannot move.
     numpy's OpenBLAS gets no thread pool: its idle threads spin a varying while after
@@ -120,7 +164,8 @@ def _api_instructions(scene_name: str, folder: Path) -> dict:
     counts = {}
     for calls in (1, 1 + API_CALLS):
         out = folder / f"callgrind.api.{calls}"
-        _under_callgrind([sys.executable, "-c", _PYTHON_LOOP, scene_name, str(RTOL), str(calls), "1", "1"], out, env)
+        _under_callgrind([sys.executable, "-c", _PYTHON_LOOP, scene_name, str(RTOL), str(calls), "1", "1"], out, env,
+                         stdin="")  # no timing asked for: the warm calls are the count
         counts[calls] = _instructions(out)
     return {"api_instructions_per_run": (counts[1 + API_CALLS] - counts[1]) / API_CALLS}
 
@@ -203,13 +248,10 @@ def c_loop(scene_name: str = "paper") -> dict:
             driver = _build(scene, folder)
         except (RuntimeError, OSError) as exc:
             return {"error": str(exc)}
-        c, py = [], []
-        for _ in range(ROUNDS):
-            c.append(_c_ms(driver))
-            py.append(_python_ms(scene_name))
-        result = {"scene": scene_name, "rtol": RTOL, "c_ms": statistics.median(c), "python_ms": statistics.median(py),
-                  "c_runs_ms": c, "python_runs_ms": py}
-        result["ratio"] = result["python_ms"] / result["c_ms"]
+        try:
+            result = {"scene": scene_name, "rtol": RTOL, **paired_timings(driver, scene_name)}
+        except (RuntimeError, OSError, ValueError, subprocess.SubprocessError) as exc:
+            return {"error": f"timing the Python API failed: {exc}"}
         result.update(_instructions_per_step(driver, folder))
         if "instructions_per_step" in result:
             try:
