@@ -7,37 +7,38 @@ the same sympy expressions the force laws are printed from. The phase machine se
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from functools import lru_cache
 
 from .build import CompiledModel
-from .codegen.parameters import PARAMETERS
+from .codegen.parameters import PARAMETERS, scene_reader
 from .errors import SceneError
 from .scene import Scene
 
 
 @lru_cache(maxsize=64)
-def _readers(ffi, links: int) -> tuple[struct.Struct, tuple[tuple[object, int], ...]]:
-    """The fields of a model's struct (its ffi) that a scene sets: their (reader, link) in
-    struct order, and the layout that writes their values into the struct in one call. Made
-    once per model: `fill_params` runs for every simulation, and a field at a time would
-    cost a C crossing each."""
-    inputs = {name: (p.read, link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
-    layout, at, readers = "=", 0, []
+def _readers(ffi, links: int) -> tuple[struct.Struct, Callable[[Scene], tuple]]:
+    """The fields of a model's struct (its ffi) that a scene sets: the function that reads
+    their values from a scene in struct order, and the layout that writes them into the
+    struct in one call. Made once per model: `fill_params` runs for every simulation, and a
+    field at a time would cost a C crossing each."""
+    inputs = {name: p.read.format(i=link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
+    layout, at, sources = "=", 0, []
     for name, field in sorted(ffi.typeof("model_params").fields, key=lambda item: item[1].offset):
         if name in inputs:
             assert field.type.cname == "double", f"the scene input {name} is not a double in model_params"
             layout += "x" * (field.offset - at) + "d"
             at = field.offset + 8
-            readers.append(inputs[name])
-    return struct.Struct(layout), tuple(readers)
+            sources.append(inputs[name])
+    return struct.Struct(layout), scene_reader(tuple(sources))
 
 
 def fill_params(model: CompiledModel, scene: Scene):
     """A new `model_params` for `scene`: its inputs, then the derived constants."""
     ffi = model.ffi
     params = ffi.new("model_params *")  # zeroed: the struct's other fields stay 0 under the layout's pad bytes
-    layout, readers = _readers(ffi, model.spec.links)
-    layout.pack_into(ffi.buffer(params), 0, *[read(scene, link) for read, link in readers])
+    layout, read = _readers(ffi, model.spec.links)
+    layout.pack_into(ffi.buffer(params), 0, *read(scene))
     derive(model, params)
     return params
 

@@ -23,23 +23,10 @@ from .errors import SolverError
 from .model_params import fill_params
 from .results import Columns, Impact, PhaseSpan, SimulationResult, TallyRecords, Trajectory
 from .scene import Scene
-from .session import CvodeSession, MachineRun, Segment
+from .session import CvodeSession, Machine, MachineRun, Segment
 from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
-SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
-
-
-class Machine:
-    """The C phase machine of one run (the session's buffer), with the names the results use."""
-
-    def __init__(self, model: CompiledModel, session: CvodeSession):
-        self.lib, self.state = model.lib, session.machine
-        self.coulomb = model.spec.coulomb
-
-    def slip_label(self, state: int, slip: float) -> str:
-        """The stick-slip label of a contact state under exact Coulomb friction, else ""."""
-        return SLIP_LABEL[slip] if self.coulomb and state != self.lib.MODEL_MACHINE_FREE else ""
 
 
 def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
@@ -55,7 +42,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     lib = model.lib
     params = fill_params(model, scene)
     session = CvodeSession.open(model, scene)
-    machine = Machine(model, session)
+    machine = session.phase_machine
     m = machine.state
     solver = scene.solver
     polynomials = dense_output or t_eval is not None
@@ -109,21 +96,22 @@ def _phase_labels(segments: list[Segment], n_samples: int, state0: int, state_en
 def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) -> list[Impact]:
     """The impacts, from the machine's record of each segment's end."""
     impacts = [Impact(t_start=0.0, i_start=0)] if contact_at_start else []
-    lib, label = machine.lib, machine.slip_label
-    BEGIN, SLIP, MAX_COMPRESSION, END = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP,
-                                         lib.MODEL_ACT_MAX_COMPRESSION, lib.MODEL_ACT_IMPACT_END)
+    label, free = machine.slip_label, machine.free
+    BEGIN, SLIP, MAX_COMPRESSION, END = machine.acts
     for seg in segments:
-        phase, new_phase, t, act = STATES[seg.state], STATES[seg.next_state], seg.t, seg.act
+        state, next_state, t, act = seg.state, seg.next_state, seg.t, seg.act
         if act & BEGIN:
             impacts.append(Impact(t_start=t, i_start=seg.sample))
-        impact = impacts[-1] if impacts else None
+        if not impacts:  # a flight before the first impact
+            continue
+        impact = impacts[-1]
         if act & SLIP:
-            impact.stick_slip.append((t, label(seg.state, seg.slip), label(seg.next_state, seg.next_slip)))
+            impact.stick_slip.append((t, label(state, seg.slip), label(next_state, seg.next_slip)))
         if act & MAX_COMPRESSION:
             impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = (
                 seg.delta_max, seg.P_max, seg.delta_r, seg.R_res)
-        if impact is not None and phase != "free" and new_phase != phase:
-            impact.switches.append((t, phase, new_phase))
+        if state != free and next_state != state:
+            impact.switches.append((t, STATES[state], STATES[next_state]))
         if act & END:
             impact.t_end, impact.i_end = t, seg.sample
     return impacts
@@ -167,7 +155,7 @@ def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, c
         piece = StepPolynomials(ran.t[a + 1:b + 1], ran.dense[a + 1:b + 1])
         pieces.append(piece)
         if sampler is not None:
-            seg_params = ran.segments[j].params if j < len(ran.segments) else params
+            seg_params = ran.segment_params[j] if j < len(ran.segments) else params
             sampler.segment(float(ran.t[b]), piece, _outputs_at(session, model, seg_params),
                             STATES[states[j + 1]])
     return pieces

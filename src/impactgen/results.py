@@ -155,6 +155,9 @@ class Tallied(NamedTuple):
     y_final: tuple[float, ...]  # q, u, then the works
 
 
+_Y_FINAL = len(Tallied._fields) - 1  # y_final, the last field, is the rest of a record's values
+
+
 class TallyRecords:
     """The C engine's two summaries (the run's, its first impact's) as the bytes of their C
     records, each made a `Tallied` when first indexed: a sweep reads one of them, a
@@ -169,8 +172,7 @@ class TallyRecords:
         made = self._made[k]
         if made is None:
             values = self._record.unpack_from(self._raw, k * self._record.size)
-            cut = len(Tallied._fields) - 1  # y_final, the last field, is the rest
-            made = self._made[k] = Tallied._make(values[:cut] + (values[cut:],))
+            made = self._made[k] = tuple.__new__(Tallied, (*values[:_Y_FINAL], values[_Y_FINAL:]))
         return made
 
     def __len__(self) -> int:

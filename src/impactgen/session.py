@@ -9,6 +9,7 @@ message into one that says what to try.
 from __future__ import annotations
 
 import struct
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -20,6 +21,24 @@ from .scene import EXPLICIT_METHODS, METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
+SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
+
+
+class Machine:
+    """The C phase machine of a session (its buffer `state`), with the names and the switch
+    actions (MODEL_ACT_* bits) the results read, looked up in the library once."""
+
+    def __init__(self, model: CompiledModel, state):
+        lib = model.lib
+        self.lib, self.state = lib, state
+        self.coulomb = model.spec.coulomb
+        self.free = lib.MODEL_MACHINE_FREE
+        self.acts = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP, lib.MODEL_ACT_MAX_COMPRESSION,
+                     lib.MODEL_ACT_IMPACT_END)
+
+    def slip_label(self, state: int, slip: float) -> str:
+        """The stick-slip label of a contact state under exact Coulomb friction, else ""."""
+        return SLIP_LABEL[slip] if self.coulomb and state != self.free else ""
 
 
 class Segment(NamedTuple):
@@ -37,7 +56,6 @@ class Segment(NamedTuple):
     P_max: float
     delta_r: float
     R_res: float
-    params: object  # a copy of the model_params it ran under (cffi), when asked for, else None
 
 
 def record_layout(ffi, ctype: str, skip: tuple[str, ...] = ()) -> str:
@@ -65,6 +83,9 @@ def summary_record(ffi) -> struct.Struct:
     return struct.Struct("=" + record_layout(ffi, "ig_summary"))
 
 
+_make_segment = partial(tuple.__new__, Segment)  # Segment._make without its Python frame (rows have its fields)
+
+
 class MachineRun(NamedTuple):
     """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
     ig_run's last return code with the message of a failure, and the time the run stopped."""
@@ -74,6 +95,7 @@ class MachineRun(NamedTuple):
     outputs: np.ndarray
     dense: np.ndarray | None
     segments: list[Segment]
+    segment_params: list | None  # a copy of the model_params each segment ran under (cffi), when asked for
     flag: int
     message: str
     t_last: float
@@ -89,7 +111,7 @@ class CvodeSession:
 
     @staticmethod
     def _pool_key(model: CompiledModel, scene: Scene) -> tuple:
-        return model.path, scene.solver.method  # the cache entry names the spec
+        return model.lib, scene.solver.method  # one library per build, hashed by identity
 
     @classmethod
     def open(cls, model: CompiledModel, scene: Scene) -> "CvodeSession":
@@ -112,12 +134,13 @@ class CvodeSession:
         self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
         # the run's arguments, allocated once
         self.machine = ffi.new("model_machine *")
+        self.phase_machine = Machine(model, self.machine)
         self.atol_now = ffi.new("double[]", model.nstate)
         self.solver = self._new_solver(scene)
         self.dense_terms = int(model.lib.ig_dense_terms(self.solver))
         self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
         self._segment_bytes = ffi.buffer(self.segments)
-        self._segment_record = struct.Struct("=" + record_layout(ffi, "ig_segment", ("params",)))
+        self._segment_record = struct.Struct("=" + record_layout(ffi, "ig_segment", ("params",)))  # as Segment
         self.n_segments = ffi.new("int *")
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
@@ -151,7 +174,7 @@ class CvodeSession:
         the run goes on with): sample 0 and the tally begun there, and, when an impact can
         follow, the integrator reset with the scene's tolerances as the machine scales them
         (ig_run_begin). Returns the machine's MODEL_START_*."""
-        self.y0[:] = scene.q0 + scene.u0 + self.works_at_start
+        self.y0_c[0:len(self.y0)] = scene.q0 + scene.u0 + self.works_at_start  # (cffi converts faster than numpy)
         solver = scene.solver
         self.t_now[0] = 0.0
         start = self.model.lib.ig_run_begin(self.solver, self.machine, params, 0.0, self.y0_c,
@@ -191,6 +214,7 @@ class CvodeSession:
             self.d_samples[0] = 0.0  # the start ends no step: it has no polynomial
         chunks: list[tuple[np.ndarray, ...]] = []
         segments: list[Segment] = []
+        segment_params: list | None = [] if with_params else None
         base = 0  # samples before this call's buffers
         self.n_out[0] = 1  # the start, written by begin
         while True:
@@ -201,7 +225,10 @@ class CvodeSession:
             k = self.n_out[0]
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            segments.extend(self._segments(base, with_params))
+            segments.extend(self._segments(base))
+            if with_params:
+                new = ffi.new
+                segment_params.extend(new("model_params *", self.segments[j].params) for j in range(self.n_segments[0]))
             base += k
             self.n_out[0] = 0
             if flag == lib.IG_BUFFER_FULL and every_step:
@@ -214,7 +241,8 @@ class CvodeSession:
         else:
             t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
-        return MachineRun(t, y, out, d, segments, int(flag), message, float(self.t_now[0]), self._summarized())
+        return MachineRun(t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
+                          self._summarized())
 
     def _summarized(self) -> TallyRecords:
         """The run's two summaries, tallied in C now (the session's buffers serve the next
@@ -227,16 +255,12 @@ class CvodeSession:
         (the tip touches the surface without pressing in: no impact)."""
         return self.out_samples[0].copy(), self._summarized()
 
-    def _segments(self, base: int, with_params: bool) -> list[Segment]:
+    def _segments(self, base: int) -> list[Segment]:
         """The segment records of the last ig_run call, their sample indices from `base` on."""
-        count = self.n_segments[0]
-        rows = self._segment_record.iter_unpack(self._segment_bytes[:count * self._segment_record.size])
+        rows = self._segment_record.iter_unpack(self._segment_bytes[:self.n_segments[0] * self._segment_record.size])
         if base:
             rows = [(r[0], base + r[1]) + r[2:] for r in rows]
-        new = self.model.ffi.new
-        params = [new("model_params *", self.segments[j].params) for j in range(count)] if with_params else None
-        make = Segment._make
-        return [make(r + (params[j] if params else None,)) for j, r in enumerate(rows)]
+        return list(map(_make_segment, rows))
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
