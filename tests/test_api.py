@@ -51,6 +51,19 @@ def test_summary_keys_are_in_the_order_a_sweep_writes_its_columns(paper_result, 
         assert list(summary) == expected and list(summary["energy"]) == list(ENERGY_TERMS)
 
 
+def test_a_tallied_summary_gives_each_field_to_its_key():
+    """_from_tally unpacks Tallied in its field order: each field lands under its own name."""
+    from impactgen.results import Tallied, _from_tally
+    values = [float(k + 1) for k in range(len(Tallied._fields) - 1)]  # all but y_final, each its own
+    tallied = Tallied(*values, y_final=(0.1, 0.2, 0.3, 0.4))
+    summary = _from_tally(tallied, 2, [])
+    flat = {**summary, **summary["energy"]}
+    for name in Tallied._fields:
+        if name in flat:
+            assert flat[name] == getattr(tallied, name), name
+    assert summary["q_final"] == [0.1, 0.2] and summary["u_final"] == [0.3, 0.4]
+
+
 def test_a_result_pickles_with_its_summary_and_warnings():
     """A result crosses processes (a user's own pool): it holds plain data, no C objects."""
     import pickle

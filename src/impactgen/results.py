@@ -518,16 +518,17 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
     lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
     first = impacts[0] if impacts else None
-    y, t_impact, t_sustained = s.y_final, s.t_impact, s.t_sustained
-    return {"T0": s.T0, "Tf": s.Tf, "delta_T": s.delta_T, "delta_max": s.delta_max, "delta_r": s.delta_r,
-            "P_max": s.P_max, "R_res": s.R_res, "t_contact": s.t_contact,
+    (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
+     W_normal, W_friction, W_gravity, residual, _, _, count, y) = s  # Tallied's fields, one unpacking
+    return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
+            "P_max": P_max, "R_res": R_res, "t_contact": t_contact,
             "t_impact": None if t_impact != t_impact else t_impact,
             "switches": _switch_list(first.switches) if first else [],
-            "stick_slip": _switch_list(first.stick_slip) if first else [],
-            "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": s.impacts,
-            "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": s.t_final,
-            "energy": {"W_normal": s.W_normal, "W_friction": s.W_friction, "W_gravity": s.W_gravity,
-                       "residual": s.residual}}
+            "stick_slip": _switch_list(first.stick_slip) if first and first.stick_slip else [],
+            "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": count,
+            "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": t_final,
+            "energy": {"W_normal": W_normal, "W_friction": W_friction, "W_gravity": W_gravity,
+                       "residual": residual}}
 
 
 def _dent(impact: Impact) -> float:
