@@ -60,8 +60,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     impacts = _impacts(machine, ran.segments, in_contact)
     status, message = _status(lib, scene, machine, ran, impacts)
 
-    trajectory = Trajectory(t=ran.t, y=ran.y, phase=partial(_phase_labels, ran.segments, len(ran.t), state0, m.state),
-                            outputs=Columns(session.output_index, ran.outputs))
+    trajectory = partial(_trajectory, ran, state0, m.state, session.output_index)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
@@ -78,6 +77,12 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries)
+
+
+def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int]) -> Trajectory:
+    """The samples of a run (made when first asked for: a summary needs none)."""
+    return Trajectory(ran.t, ran.y, partial(_phase_labels, ran.segments, len(ran.t), state0, state_end),
+                      Columns(output_index, ran.outputs))
 
 
 def _runs(segments: list[Segment], n_samples: int, state0: int, state_end: int) -> tuple[list[int], list[int]]:

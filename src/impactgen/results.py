@@ -256,7 +256,7 @@ class SimulationResult:
     engine: str
     status: str
     message: str
-    trajectory: Trajectory  # every step: what the summaries are computed from
+    steps: "Trajectory | Callable[[], Trajectory]"  # `trajectory`, or what makes it on first use
     spans: "list[PhaseSpan] | Callable[[], list[PhaseSpan]]"  # `phases`, or what makes them on first use
     impact_records: list[Impact]  # as the engine recorded them: their energies wait for `impacts`
     counters: "dict[str, Any] | Callable[[], dict[str, Any]]"  # `stats`, or what makes them on first use
@@ -264,6 +264,12 @@ class SimulationResult:
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
     tallied: "TallyRecords | tuple[Tallied, Tallied] | None" = None  # the C engine's summaries (run, first impact)
+
+    @computed_once
+    def trajectory(self) -> Trajectory:
+        """The samples at every step (made on first use: a summary the engine tallied, and the
+        warnings, need none)."""
+        return _made(self.steps)
 
     @computed_once
     def phases(self) -> list[PhaseSpan]:
@@ -279,7 +285,7 @@ class SimulationResult:
         """Pickled as plain data: what is made on first use is made first (what makes it may
         hold C objects)."""
         state = dict(self.__dict__)
-        state["spans"], state["counters"] = self.phases, self.stats
+        state["steps"], state["spans"], state["counters"] = self.trajectory, self.phases, self.stats
         return state
 
     @computed_once
