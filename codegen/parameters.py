@@ -40,6 +40,11 @@ class Parameter:
     high_open: bool = False
     fmi_type: str = "Real"  # "Real" | "Boolean"
 
+    def source(self, link: int) -> str:
+        """The expression that reads this row's value (for `link`, from 0) from a scene `s`."""
+        assert self.read is not None, f"{self.name} is not set by a scene"
+        return self.read.format(i=link)
+
     def names(self, links: int) -> list[tuple[str, str, int]]:
         """(C name, scene key, link index) of each field the row stands for."""
         if not self.per_link:
@@ -144,8 +149,7 @@ class Field:
     @property
     def source(self) -> str:
         """The expression that reads the field's value from a scene `s`."""
-        assert self.row.read is not None, f"{self.name} is not set by a scene"
-        return self.row.read.format(i=self.link)
+        return self.row.source(self.link)
 
     def read(self, scene: Any) -> float:
         return float(scene_reader((self.source,))(scene)[0])

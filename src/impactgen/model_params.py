@@ -22,7 +22,7 @@ def _readers(ffi, links: int) -> tuple[struct.Struct, Callable[[Scene], tuple]]:
     their values from a scene in struct order, and the layout that writes them into the
     struct in one call. Made once per model: `fill_params` runs for every simulation, and a
     field at a time would cost a C crossing each."""
-    inputs = {name: p.read.format(i=link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
+    inputs = {name: p.source(link) for p in PARAMETERS if p.kind == "input" for name, _, link in p.names(links)}
     layout, at, sources = "=", 0, []
     for name, field in sorted(ffi.typeof("model_params").fields, key=lambda item: item[1].offset):
         if name in inputs:

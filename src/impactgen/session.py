@@ -30,7 +30,7 @@ class Machine:
 
     def __init__(self, model: CompiledModel, state):
         lib = model.lib
-        self.lib, self.state = lib, state
+        self.state = state
         self.coulomb = model.spec.coulomb
         self.free = lib.MODEL_MACHINE_FREE
         self.acts = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP, lib.MODEL_ACT_MAX_COMPRESSION,
