@@ -159,8 +159,9 @@ class Kernel:
 
     q: tuple[tuple[int, str], ...]  # (index into y, name)
     params: tuple[str, ...]
-    trig: tuple[tuple[str, str, str], ...]  # (name, "sin"|"cos", angle)
+    trig: tuple[tuple[str, str, str, int], ...]  # (name, "sin"|"cos", angle, its slot in trig[])
     blocks: tuple[CBlock, ...]
+    trig_only: frozenset[str] = frozenset()  # angles read only through their sin and cos
 
 
 def _kernel(model: ModelExpressions, blocks: list[CBlock], extra: tuple = ()) -> Kernel:
@@ -168,13 +169,14 @@ def _kernel(model: ModelExpressions, blocks: list[CBlock], extra: tuple = ()) ->
     read, from their free symbols: the states, parameters and sin/cos to unpack, in order."""
     n = model.spec.links
     reads = set().union(*(b.reads for b in blocks), _reads(extra))
-    trig = [(f"{fn}_q{i}", fn, f"q{i}") for i in range(1, n + 1) for fn in ("sin", "cos")
-            if f"{fn}_q{i}" in reads]
-    reads |= {angle for _, _, angle in trig}
+    trig = [(f"{fn}_q{i}", fn, f"q{i}", 2 * (i - 1) + (fn == "cos")) for i in range(1, n + 1)
+            for fn in ("sin", "cos") if f"{fn}_q{i}" in reads]
+    trig_only = frozenset(angle for _, _, angle, _ in trig) - reads
+    reads |= trig_only
     states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
     used_states = tuple((i, name) for i, name in states if name in reads)
     params = tuple(f.name for f in model.params if f.name in reads)
-    return Kernel(used_states, params, tuple(trig), tuple(blocks))
+    return Kernel(used_states, params, tuple(trig), tuple(blocks), trig_only)
 
 
 @dataclass(frozen=True)

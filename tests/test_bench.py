@@ -165,7 +165,8 @@ def test_the_c_engines_instructions_are_counted_by_phase_and_by_part(tmp_path):
     assert all(1e3 < n < 1e5 for n in by_phase.values())
     shares = cloop._where_instructions_go(driver, tmp_path)["instruction_shares"]
     assert all(0 <= v <= 1 for v in shares.values()) and sum(shares.values()) == pytest.approx(1.0)
-    assert shares["right-hand side"] > 0.01 and shares["the integrator's own work"] > 0.05
+    # the explicit pair's right-hand sides (model_rhs_trig, model_trig) are about half of its work
+    assert shares["right-hand side"] > 0.3 and shares["the integrator's own work"] > 0.05
 
 
 @pytest.mark.slow

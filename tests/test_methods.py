@@ -75,7 +75,28 @@ def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
     assert auto.stats["nstiff"] >= 1 and auto.stats["nsteps"] < bdf.stats["nsteps"]
     assert len(auto.impacts) == len(bdf.impacts)
     assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-4)
-    assert abs(auto.summary["energy"]["residual"]) < 1e-4 * auto.summary["T0"]
+    # The stuck tip's layer (eps = 1e-10 m/s) is as thin as atol (1e-10): the motion after it is
+    # not resolved at these tolerances, and BDF alone closes the energy budget only to 5 % of T0.
+    # Where the budget does not close the result says so; test_auto_and_bdf_agree_on_a_resolved_stuck_tip
+    # holds the physics at tolerances that resolve it.
+    closes = abs(auto.summary["energy"]["residual"]) < 1e-4 * auto.summary["T0"]
+    assert closes or any("energy budget does not close" in w for w in auto.warnings)
+
+
+def test_auto_and_bdf_agree_on_a_resolved_stuck_tip():
+    """The stuck tip of test_auto_hands_a_segment_that_turns_stiff_to_bdf at tolerances that
+    resolve its friction layer: "auto" (the pair, then BDF) and BDF agree on the contact and
+    both close the energy budget."""
+    scene = impactgen.load_scene("paper", overrides={"solver.rtol": 1e-10, "solver.atol": 1e-13,
+                                                      "contact.friction": 2.0, "contact.friction_eps": 1e-10})
+    auto, bdf = (impactgen.simulate(scene, method=m) for m in ("auto", "bdf"))
+    assert auto.success and bdf.success and auto.stats["nstiff"] >= 1
+    assert [p.phase for p in auto.phases] == [p.phase for p in bdf.phases] == ["elastic", "elastoplastic",
+                                                                                 "restitution"]
+    assert auto.summary["t_contact"] == pytest.approx(bdf.summary["t_contact"], rel=1e-5)
+    assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-6)
+    for r in (auto, bdf):
+        assert abs(r.summary["energy"]["residual"]) < 1e-6 * r.summary["T0"] and not r.warnings
 
 
 @pytest.mark.parametrize("mu, eps", [(1.0, 1e-9), (3.0, 1e-10)])

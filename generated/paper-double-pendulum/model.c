@@ -155,16 +155,31 @@ static double normal_force_slope(double delta, const model_params *p)
     }
 }
 
+/* The sines and cosines of the link angles, in model_trig's layout. */
+static inline void trig_of(const double *y, double *trig)
+{
+    const double q1 = y[0];
+    const double q2 = y[1];
+    trig[0] = sin(q1);
+    trig[1] = cos(q1);
+    trig[2] = sin(q2);
+    trig[3] = cos(q2);
+}
+
+void model_trig(const double *y, double *trig)
+{
+    trig_of(y, trig);
+}
+
 /* The tip's motion and the contact forces on it, as one evaluation found them. */
 typedef struct {
     double delta, v_By, F, v_Bx, F_f;
 } tip_forces;
 
 /* du/dt from Kane's equations M du/dt = f. */
-static int accelerations(const double *y, const model_params *p, double *udot, tip_forces *c)
+static int accelerations(const double *y, const double *trig, const model_params *p, double *udot,
+                         tip_forces *c)
 {
-    const double q1 = y[0];
-    const double q2 = y[1];
     const double u1 = y[2];
     const double u2 = y[3];
     const double L1 = p->L1;
@@ -175,10 +190,10 @@ static int accelerations(const double *y, const model_params *p, double *udot, t
     const double mu = p->mu;
     const double eps = p->eps;
     const double y_s = p->y_s;
-    const double sin_q1 = sin(q1);
-    const double cos_q1 = cos(q1);
-    const double sin_q2 = sin(q2);
-    const double cos_q2 = cos(q2);
+    const double sin_q1 = trig[0];
+    const double cos_q1 = trig[1];
+    const double sin_q2 = trig[2];
+    const double cos_q2 = trig[3];
 
     /* tip kinematics */
     const double tip0 = L1*sin_q1;
@@ -219,27 +234,31 @@ static int accelerations(const double *y, const model_params *p, double *udot, t
     return 0;
 }
 
-int model_rhs(double t, const double *y, double *ydot, const model_params *p)
+int model_rhs_trig(double t, const double *y, const double *trig, double *ydot, const model_params *p)
 {
     (void)t;
     tip_forces c;
-    const int status = accelerations(y, p, ydot + 2, &c);
+    const int status = accelerations(y, trig, p, ydot + 2, &c);
     if (status) return status;
     ydot[0] = y[2];
     ydot[1] = y[3];
     ydot[4] = c.F*c.v_By;  /* power of the normal force, W */
     ydot[5] = c.F_f*c.v_Bx;  /* power of the friction force, W */
-    for (int k = 0; k < MODEL_NSTATE; ++k) {
-        if (!isfinite(ydot[k])) return 1;
-    }
-    return 0;
+    double not_finite = 0.0;  /* 0 * x is 0 for a finite x and NaN for an infinite or NaN one */
+    for (int k = 0; k < MODEL_NSTATE; ++k) not_finite += 0.0 * ydot[k];
+    return isnan(not_finite) ? 1 : 0;
 }
 
-void model_events(double t, const double *y, double *ev, const model_params *p)
+int model_rhs(double t, const double *y, double *ydot, const model_params *p)
+{
+    double trig[MODEL_NTRIG];
+    trig_of(y, trig);
+    return model_rhs_trig(t, y, trig, ydot, p);
+}
+
+void model_events_trig(double t, const double *y, const double *trig, double *ev, const model_params *p)
 {
     (void)t;
-    const double q1 = y[0];
-    const double q2 = y[1];
     const double u1 = y[2];
     const double u2 = y[3];
     const double L1 = p->L1;
@@ -248,10 +267,10 @@ void model_events(double t, const double *y, double *ev, const model_params *p)
     const double y_s = p->y_s;
     const double delta_m = p->delta_m;
     const double delta_r = p->delta_r;
-    const double sin_q1 = sin(q1);
-    const double cos_q1 = cos(q1);
-    const double sin_q2 = sin(q2);
-    const double cos_q2 = cos(q2);
+    const double sin_q1 = trig[0];
+    const double cos_q1 = trig[1];
+    const double sin_q2 = trig[2];
+    const double cos_q2 = trig[3];
 
     const double delta = -L1*sin_q1 - L2*sin_q2 + y_s;
     const double delta_rate = -L1*cos_q1*u1 - L2*cos_q2*u2;
@@ -263,11 +282,18 @@ void model_events(double t, const double *y, double *ev, const model_params *p)
     ev[MODEL_EVENT_PASSES_DELTA_M] = delta - delta_m;
 }
 
+void model_events(double t, const double *y, double *ev, const model_params *p)
+{
+    double trig[MODEL_NTRIG];
+    trig_of(y, trig);
+    model_events_trig(t, y, trig, ev, p);
+}
+
 void model_outputs(double t, const double *y, double *out, const model_params *p)
 {
     (void)t;
-    const double q1 = y[0];
-    const double q2 = y[1];
+    double trig[MODEL_NTRIG];
+    trig_of(y, trig);
     const double u1 = y[2];
     const double u2 = y[3];
     const double L1 = p->L1;
@@ -278,10 +304,10 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double mu = p->mu;
     const double eps = p->eps;
     const double y_s = p->y_s;
-    const double sin_q1 = sin(q1);
-    const double cos_q1 = cos(q1);
-    const double sin_q2 = sin(q2);
-    const double cos_q2 = cos(q2);
+    const double sin_q1 = trig[0];
+    const double cos_q1 = trig[1];
+    const double sin_q2 = trig[2];
+    const double cos_q2 = trig[3];
 
     const double tip0 = L1*cos_q1;
     const double tip1 = L2*cos_q2;

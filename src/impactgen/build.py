@@ -35,7 +35,10 @@ from .codegen.spec import ModelSpec
 from .errors import BuildError
 from .sundials import Sundials, find_sundials
 
-COMPILE_ARGS = ("-O2",)
+# -O3 unrolls and vectorizes the small fixed loops of the explicit pair; -fno-math-errno lets sqrt be
+# one instruction (nothing here reads errno). The paper's impact gives the same numbers to the last
+# digit as at -O2, in about 10 % fewer instructions (docs/benchmarks.md).
+COMPILE_ARGS = ("-O3", "-fno-math-errno")
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
 GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "dopri5.c", "dopri5.h", "small_kernels.c", "small_kernels.h")

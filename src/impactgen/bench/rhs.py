@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..build import compile_model
+from ..build import COMPILE_ARGS, compile_model
 from ..codegen.emit import generate_model
 from ..codegen.spec import ModelSpec
 from ..model_params import params_at_start
@@ -70,7 +70,7 @@ def c_from_c(spec: ModelSpec, params_source: str, y: np.ndarray, repeats: int = 
                 return 0;
             }}
         """))
-        subprocess.run([cc, "-std=c99", "-O2", "bench.c", "model.c", "-lm", "-o", "bench"], cwd=d, check=True)
+        subprocess.run([cc, "-std=c99", *COMPILE_ARGS, "bench.c", "model.c", "-lm", "-o", "bench"], cwd=d, check=True)
         out = subprocess.run([str(d / "bench")], capture_output=True, text=True, check=True).stdout
     return float(out.split()[0])
 

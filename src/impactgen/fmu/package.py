@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .. import __version__
-from ..build import GLUE_FILES, _native
+from ..build import COMPILE_ARGS, GLUE_FILES, _native
 from ..codegen.emit import _c_double, _templates, _tidy, driver_files, generate_model
 from ..codegen.expressions import assemble_model
 from ..codegen.spec import ModelSpec
@@ -170,7 +170,7 @@ def _compile(src: Path, c_files: list[str], defines: list[str], cs: bool, binary
     if not cc:
         raise BuildError("no C compiler found to build the FMU: install gcc (Debian: 'sudo apt-get install "
                          "build-essential') or set CC")
-    args = [cc, "-std=c99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-Wall", "-Wextra",
+    args = [cc, "-std=c99", *COMPILE_ARGS, "-fPIC", "-shared", "-fvisibility=hidden", "-Wall", "-Wextra",
             f"-I{src}", *[f"-D{d}" for d in defines], *[str(src / f) for f in c_files]]
     if cs:
         sundials = find_sundials()

@@ -20,6 +20,9 @@
 #define FAC_MIN_START 1e-3 /* until a start's first step is accepted, a rejected step shrinks by the error's
                             * own h^5 law (at most this much): the starting guess can be far off where a
                             * force law begins at 0 (Hertz's delta^1.5 at first contact) */
+#define TRIG_SHIFT_MAX 0.0625 /* a stage's angle within this of the step start's (rad): its sine and cosine
+                               * come from the start's (shifted_trig), beyond it from libm */
+#define TRIG_SHIFT_SHORT 0x1p-10 /* ... within this, by shorter series (contact steps move the angles by 1e-5) */
 
 /* Dormand and Prince's tableau, its error weights and its dense-output weights. */
 static const double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
@@ -44,12 +47,62 @@ static int rhs(ig_dopri5 *r, double t, const double *y, double *f)
     return model_rhs(t, y, f, r->params) != 0 ? -1 : 0;
 }
 
-static void watched(ig_dopri5 *r, double t, const double *y, double *g)
+/* The same, given the sines and cosines of y's angles (model_trig's layout). */
+static int rhs_trig(ig_dopri5 *r, double t, const double *y, const double *trig, double *f)
+{
+    r->nfev++;
+    return model_rhs_trig(t, y, trig, f, r->params) != 0 ? -1 : 0;
+}
+
+static void watched_trig(ig_dopri5 *r, double t, const double *y, const double *trig, double *g)
 {
     double ev[MODEL_NEVENT];
     r->ngev++;
-    model_events(t, y, ev, r->params);
+    model_events_trig(t, y, trig, ev, r->params);
     for (int k = 0; k < r->nevents; ++k) g[k] = ev[r->events[k]];
+}
+
+static void watched(ig_dopri5 *r, double t, const double *y, double *g)
+{
+    double trig[MODEL_NTRIG];
+    model_trig(y, trig);
+    watched_trig(r, t, y, trig, g);
+}
+
+/* sin(q + d) and cos(q + d) into out[0], out[1] from s = sin q and c = cos q, as
+ * s + (s (cos d - 1) + c sin d) and c + (c (cos d - 1) - s sin d), with cos d - 1 and sin d
+ * by their Taylor series: to d^8 and d^9 for |d| <= TRIG_SHIFT_MAX, where the first terms
+ * left out, d^10 / 10! and d^11 / 11!, are below 3e-19 and 3e-21; to d^4 and d^5 for
+ * |d| <= TRIG_SHIFT_SHORT, where d^6 / 6! and d^7 / 7! are below 3e-21 and 3e-25. Either is far
+ * under an ulp of the result: it is libm's to about an ulp (the start's own rounding and the
+ * sum's), at a fraction of the cost. */
+static inline void shifted_trig(double s, double c, double d, double *out)
+{
+    const double z = d * d;
+    double cm1, sd;
+    if (fabs(d) <= TRIG_SHIFT_SHORT) {
+        cm1 = z * (-1.0 / 2 + z * (1.0 / 24));
+        sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120));
+    } else {
+        cm1 = z * (-1.0 / 2 + z * (1.0 / 24 + z * (-1.0 / 720 + z * (1.0 / 40320))));
+        sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120 + z * (-1.0 / 5040 + z * (1.0 / 362880))));
+    }
+    out[0] = s + (s * cm1 + c * sd);
+    out[1] = c + (c * cm1 - s * sd);
+}
+
+/* The sines and cosines of the angles of y = y0 + dy (the angles are y[0 .. MODEL_NQ)), from
+ * y0's in trig0. */
+static inline void stage_trig(const double *trig0, const double *dy, const double *y, double *trig)
+{
+    for (int i = 0; i < MODEL_NQ; ++i) {
+        if (fabs(dy[i]) <= TRIG_SHIFT_MAX) {
+            shifted_trig(trig0[2 * i], trig0[2 * i + 1], dy[i], trig + 2 * i);
+        } else {
+            trig[2 * i] = sin(y[i]);
+            trig[2 * i + 1] = cos(y[i]);
+        }
+    }
 }
 
 static double sign_of(double v)
@@ -93,7 +146,7 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
     r->t = r->t_old = t0;
     r->t_stop = t_stop;
     memcpy(r->y, y0, sizeof r->y);
-    r->fac_old = ERR_FLOOR;
+    r->log_fac_old = log(ERR_FLOOR);
     r->rejected = 0;
     r->nsteps = r->nfev = r->netfails = r->ngev = 0;
     r->stiff_count = r->smooth_count = r->stiff = 0;
@@ -102,10 +155,11 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
         r->events[k] = events[k];
         r->directions[k] = directions[k];
     }
-    if (rhs(r, t0, r->y, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
+    model_trig(r->y, r->trig);
+    if (rhs_trig(r, t0, r->y, r->trig, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
     r->h = first_step(r, r->k[1], r->k[2]);
     if (h_hint > 0.0) r->h = fmin(r->h, h_hint);
-    watched(r, t0, r->y, r->g);
+    watched_trig(r, t0, r->y, r->trig, r->g);
     int at_zero = 0;
     for (int k = 0; k < nevents; ++k) {
         r->side[k] = sign_of(r->g[k]);
@@ -123,31 +177,42 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
     /* the polynomial of a zero-length step: constant y (for an interpolation before any step) */
     r->h_old = 0.0;
     memcpy(r->cont[0], r->y, sizeof r->y);
+    memcpy(r->trig_old, r->trig, sizeof r->trig);
     memset(r->cont[1], 0, sizeof r->cont - sizeof r->cont[0]);
     return 0;
 }
 
-/* The stages of a step of size h from (t, y); the new state in y1 and the error norm. */
-static int attempt(ig_dopri5 *r, double h, double *y1, double *err)
+/* The stages of a step of size h from (t, y); the new state in y1 with its sines and cosines
+ * in trig1, and the error norm. The inner stages take their angles' sines and cosines from
+ * the step start's (stage_trig); the end point, which the next step starts from, from libm. */
+static int attempt(ig_dopri5 *r, double h, double *y1, double *trig1, double *err)
 {
-    double (*k)[N] = r->k, tmp[N];
+    double (*k)[N] = r->k, dy[N], tmp[N], trig[MODEL_NTRIG];
     const double t = r->t, *y = r->y;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * a21 * k[0][i];
-    if (rhs(r, t + c2 * h, tmp, k[1]) != 0) return -1;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * (a31 * k[0][i] + a32 * k[1][i]);
-    if (rhs(r, t + c3 * h, tmp, k[2]) != 0) return -1;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * (a41 * k[0][i] + a42 * k[1][i] + a43 * k[2][i]);
-    if (rhs(r, t + c4 * h, tmp, k[3]) != 0) return -1;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + h * (a51 * k[0][i] + a52 * k[1][i] + a53 * k[2][i] + a54 * k[3][i]);
-    if (rhs(r, t + c5 * h, tmp, k[4]) != 0) return -1;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + (dy[i] = h * a21 * k[0][i]);
+    stage_trig(r->trig, dy, tmp, trig);
+    if (rhs_trig(r, t + c2 * h, tmp, trig, k[1]) != 0) return -1;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + (dy[i] = h * (a31 * k[0][i] + a32 * k[1][i]));
+    stage_trig(r->trig, dy, tmp, trig);
+    if (rhs_trig(r, t + c3 * h, tmp, trig, k[2]) != 0) return -1;
+    for (int i = 0; i < N; ++i) tmp[i] = y[i] + (dy[i] = h * (a41 * k[0][i] + a42 * k[1][i] + a43 * k[2][i]));
+    stage_trig(r->trig, dy, tmp, trig);
+    if (rhs_trig(r, t + c4 * h, tmp, trig, k[3]) != 0) return -1;
     for (int i = 0; i < N; ++i) {
-        tmp[i] = y[i] + h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]);
+        tmp[i] = y[i] + (dy[i] = h * (a51 * k[0][i] + a52 * k[1][i] + a53 * k[2][i] + a54 * k[3][i]));
     }
-    if (rhs(r, t + h, tmp, k[5]) != 0) return -1;
+    stage_trig(r->trig, dy, tmp, trig);
+    if (rhs_trig(r, t + c5 * h, tmp, trig, k[4]) != 0) return -1;
+    for (int i = 0; i < N; ++i) {
+        tmp[i] = y[i] + (dy[i] = h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]));
+    }
+    stage_trig(r->trig, dy, tmp, trig);
+    if (rhs_trig(r, t + h, tmp, trig, k[5]) != 0) return -1;
     for (int i = 0; i < N; ++i) {
         y1[i] = y[i] + h * (a71 * k[0][i] + a73 * k[2][i] + a74 * k[3][i] + a75 * k[4][i] + a76 * k[5][i]);
     }
-    if (rhs(r, t + h, y1, k[6]) != 0) return -1;
+    model_trig(y1, trig1);
+    if (rhs_trig(r, t + h, y1, trig1, k[6]) != 0) return -1;
     double num = 0.0, den = 0.0;  /* stiffness estimate: |f(y1) - f(y6)| / |y1 - y6| */
     for (int i = 0; i < N; ++i) {
         num += (k[6][i] - k[5][i]) * (k[6][i] - k[5][i]);
@@ -188,6 +253,17 @@ void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
     }
 }
 
+/* The same, with the sines and cosines of y's angles from the step start's. */
+static void interpolate_trig(const ig_dopri5 *r, double t, double *y, double *trig)
+{
+    const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
+    double dy[N];
+    for (int i = 0; i < N; ++i) {
+        y[i] = r->cont[0][i] + (dy[i] = s * (r->cont[1][i] + s1 * (r->cont[2][i] + s * (r->cont[3][i] + s1 * r->cont[4][i]))));
+    }
+    stage_trig(r->trig_old, dy, y, trig);
+}
+
 void ig_dopri5_taylor(const ig_dopri5 *r, double *rows)
 {
     /* the extension in powers of s = (t - t_old) / h_old, shifted to the s of r->t */
@@ -224,14 +300,14 @@ static int crossed(const ig_dopri5 *r, int k, double g)
  * continuous extension of the last step): the right end of a bracket narrower than tol. */
 static double locate(ig_dopri5 *r, int k, double t_lo, double g_lo, double t_hi, double g_hi, double tol)
 {
-    double y[N], g[MODEL_NEVENT];
+    double y[N], trig[MODEL_NTRIG], g[MODEL_NEVENT];
     const double side = r->side[k];
     int kept = 0;  /* which end stayed the last time (Illinois halves its value) */
     for (int it = 0; it < ROOT_ITERATIONS && t_hi - t_lo > tol; ++it) {
         double t_mid = t_hi - g_hi * (t_hi - t_lo) / (g_hi - g_lo);
         if (!(t_mid > t_lo + tol / 2 && t_mid < t_hi - tol / 2)) t_mid = 0.5 * (t_lo + t_hi);
-        ig_dopri5_interpolate(r, t_mid, y);
-        watched(r, t_mid, y, g);
+        interpolate_trig(r, t_mid, y, trig);
+        watched_trig(r, t_mid, y, trig, g);
         if (sign_of(g[k]) == side) {  /* still on the old side */
             t_lo = t_mid;
             g_lo = g[k];
@@ -262,36 +338,41 @@ static int some_unarmed(const ig_dopri5 *r)
 int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
 {
     const double expo = 0.2 - BETA * 0.75;
-    double y1[N], err = 0.0;
+    double y1[N], trig1[MODEL_NTRIG], err = 0.0;
     int retries = 0;
     for (;;) {
         double h = r->h;
         if (0.1 * fabs(h) <= fabs(r->t) * DBL_EPSILON || !(h > 0.0)) return IG_DOPRI5_TOO_SMALL;
         const int last = r->t + 1.01 * h >= r->t_stop;
         if (last) h = r->t_stop - r->t;
-        if (attempt(r, h, y1, &err) != 0) {  /* the right-hand side failed: a smaller step */
+        if (attempt(r, h, y1, trig1, &err) != 0) {  /* the right-hand side failed: a smaller step */
             if (++retries > RHS_RETRIES) return IG_DOPRI5_RHS_FAILED;
             r->netfails++;
             r->h = 0.25 * h;
             r->rejected = 1;
             continue;
         }
+        /* the controller's powers of the error as exponentials of its logarithm: one log and
+         * one exp per attempt where two pow calls cost twice that */
+        const double log_err = log(err);
         if (err > 1.0) {  /* rejected: a smaller step */
             r->netfails++;
-            r->h = r->nsteps == 0 ? h * fmax(FAC_MIN_START, SAFE * pow(err, -0.2))
-                                  : h / fmin(1.0 / FAC_MIN, pow(err, expo) / SAFE);
+            r->h = r->nsteps == 0 ? h * fmax(FAC_MIN_START, SAFE * exp(-0.2 * log_err))
+                                  : h / fmin(1.0 / FAC_MIN, exp(expo * log_err) / SAFE);
             r->rejected = 1;
             continue;
         }
-        /* accepted: the PI controller's next step (its powers computed only here, where they are used) */
-        const double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, pow(err, expo) / pow(r->fac_old, BETA) / SAFE));
+        /* accepted: the PI controller's next step */
+        const double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, exp(expo * log_err - BETA * r->log_fac_old) / SAFE));
         double h_new = h / fac;
-        r->fac_old = fmax(err, ERR_FLOOR);
+        r->log_fac_old = fmax(log_err, log(ERR_FLOOR));
         keep_extension(r, h, y1);
         r->t_old = r->t;
         r->h_old = h;
         r->t = last ? r->t_stop : r->t + h;
         memcpy(r->y, y1, sizeof r->y);
+        memcpy(r->trig_old, r->trig, sizeof r->trig);
+        memcpy(r->trig, trig1, sizeof r->trig);
         memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
         if (r->rejected) h_new = fmin(h_new, h);
         const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
@@ -309,7 +390,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
     /* the watched events over the step: at its end, and inside it while some is not armed */
     double g_end[MODEL_NEVENT], g_lo[MODEL_NEVENT], g_hi[MODEL_NEVENT], t_lo = r->t_old;
     memcpy(g_lo, r->g, sizeof g_lo);
-    watched(r, r->t, r->y, g_end);
+    watched_trig(r, r->t, r->y, r->trig, g_end);
     const int points = some_unarmed(r) ? INSIDE_POINTS : 0;
     const double tol = ROOT_TOLERANCE * DBL_EPSILON * fmax(fabs(r->t), fabs(r->h_old));
     for (int j = 1; j <= points + 1; ++j) {
@@ -317,9 +398,9 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         if (j > points) {
             memcpy(g_hi, g_end, sizeof g_hi);
         } else {
-            double y[N];
-            ig_dopri5_interpolate(r, t_hi, y);
-            watched(r, t_hi, y, g_hi);
+            double y[N], trig[MODEL_NTRIG];
+            interpolate_trig(r, t_hi, y, trig);
+            watched_trig(r, t_hi, y, trig, g_hi);
         }
         int any = 0;
         for (int k = 0; k < r->nevents; ++k) any |= crossed(r, k, g_hi[k]);
@@ -342,14 +423,15 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
                     ++located;
                 }
                 if (located == before || located == r->nevents || first == end) break;
-                double y_first[N];
-                ig_dopri5_interpolate(r, first, y_first);
-                watched(r, first, y_first, g_end_now);
+                double y_first[N], trig[MODEL_NTRIG];
+                interpolate_trig(r, first, y_first, trig);
+                watched_trig(r, first, y_first, trig, g_end_now);
             }
             for (int k = 0; k < r->nevents; ++k) roots_found[k] = t_root[k] <= first + tol;
             if (first < r->t) {
                 r->t = first;
                 ig_dopri5_interpolate(r, first, r->y);
+                model_trig(r->y, r->trig);
             }
             return IG_DOPRI5_ROOT;
         }

@@ -35,9 +35,11 @@ typedef struct {
     double t, h, t_stop;          /* time reached, next step size, the end of the segment */
     double t_old, h_old;          /* the last step: [t_old, t_old + h_old] */
     double y[MODEL_NSTATE];
+    double trig[MODEL_NTRIG];     /* the sines and cosines of y's angles (model_trig) */
+    double trig_old[MODEL_NTRIG]; /* ... and of the last step's start's, y(t_old) */
     double k[IG_DOPRI5_STAGES][MODEL_NSTATE];  /* stages; k[0] is f(t, y) (first same as last) */
     double cont[5][MODEL_NSTATE]; /* continuous extension of the last step */
-    double fac_old;               /* the PI controller's memory */
+    double log_fac_old;           /* the PI controller's memory: the log of the last accepted error */
     int rejected;                 /* the step before was rejected */
     int nevents, events[MODEL_NEVENT], directions[MODEL_NEVENT];
     double g[MODEL_NEVENT];       /* watched event functions at t */
