@@ -245,22 +245,26 @@ static void keep_extension(ig_dopri5 *r, double h, const double *y1)
     }
 }
 
-void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
+/* y at t within the last step, and dy = y - y(t_old) as the extension gives it. */
+static inline void interpolate_with_increment(const ig_dopri5 *r, double t, double *y, double *dy)
 {
     const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
     for (int i = 0; i < N; ++i) {
-        y[i] = r->cont[0][i] + s * (r->cont[1][i] + s1 * (r->cont[2][i] + s * (r->cont[3][i] + s1 * r->cont[4][i])));
+        y[i] = r->cont[0][i] + (dy[i] = s * (r->cont[1][i] + s1 * (r->cont[2][i] + s * (r->cont[3][i] + s1 * r->cont[4][i]))));
     }
+}
+
+void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
+{
+    double dy[N];
+    interpolate_with_increment(r, t, y, dy);
 }
 
 /* The same, with the sines and cosines of y's angles from the step start's. */
 static void interpolate_trig(const ig_dopri5 *r, double t, double *y, double *trig)
 {
-    const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
     double dy[N];
-    for (int i = 0; i < N; ++i) {
-        y[i] = r->cont[0][i] + (dy[i] = s * (r->cont[1][i] + s1 * (r->cont[2][i] + s * (r->cont[3][i] + s1 * r->cont[4][i]))));
-    }
+    interpolate_with_increment(r, t, y, dy);
     stage_trig(r->trig_old, dy, y, trig);
 }
 
