@@ -1,7 +1,8 @@
 """The explicit pair's stages take their angles' sines and cosines from the step start's by a
 short series (dopri5.c, shifted_trig): within an ulp of 1 of the exact values, closer than libm
-at the stage angle rounded to a double; and the model's trig entry points give the plain ones'
-results bit for bit. tests/c/trig_shift_driver.c checks both."""
+at the stage angle rounded to a double, and so is a chain of TRIG_CHAIN_MAX of them (a step's
+end point shifted from its start's, step after step); and the model's trig entry points give
+the plain ones' results bit for bit. tests/c/trig_shift_driver.c checks both."""
 from __future__ import annotations
 
 import shutil

@@ -11,6 +11,22 @@
 
 #define SAMPLES 2000000L
 #define ABS_LIMIT 0x1p-52  /* the shift's absolute error at most this (2.2e-16): an ulp of 1 */
+#define CHAIN_LIMIT 0x1p-50 /* TRIG_CHAIN_MAX shifts in a row from libm's values: at most 4 ulps of 1, what libm
+                             * gives at an angle rounded to a double */
+#define CHAINS 200000L
+
+/* sin and cos of q + d into out from those of q, as the pair's stages take them (stage_trig, here
+ * for the first angle; y, the angle q + d, is what libm would be given beyond TRIG_SHIFT_MAX) */
+static void shifted_trig(double s, double c, double d, double *out)
+{
+    double trig0[MODEL_NTRIG] = {0}, dy[MODEL_NSTATE] = {0}, y[MODEL_NSTATE] = {0}, trig[MODEL_NTRIG];
+    trig0[0] = s;
+    trig0[1] = c;
+    dy[0] = d;
+    stage_trig(trig0, dy, y, trig);
+    out[0] = trig[0];
+    out[1] = trig[1];
+}
 
 /* A deterministic pseudo-random number in [0, 1) (a 64-bit linear congruential generator). */
 static double next_uniform(unsigned long long *state)
@@ -40,6 +56,25 @@ int main(void)
            worst_libm / 0x1p-52, SAMPLES);
     if (!(worst <= ABS_LIMIT)) {
         printf("trig shift: error %.3g beyond %.3g\n", worst, ABS_LIMIT);
+        return 1;
+    }
+    /* a step's end shifted from its start's, TRIG_CHAIN_MAX steps in a row (dopri5.c, attempt) */
+    double worst_chain = 0.0;
+    for (long n = 0; n < CHAINS; ++n) {
+        double q = (next_uniform(&state) - 0.5) * 20.0, sc[2] = {sin(q), cos(q)};
+        long double exact = q;
+        for (int j = 0; j < TRIG_CHAIN_MAX; ++j) {
+            const double d = (next_uniform(&state) - 0.5) * 2.0 * TRIG_SHIFT_MAX * pow(10.0, -6.0 * next_uniform(&state));
+            const double q1 = q + d, dq = q1 - q;  /* as attempt() takes it: the end point's angle less the start's */
+            shifted_trig(sc[0], sc[1], dq, sc);
+            exact += dq;
+            q = q1;
+        }
+        worst_chain = fmax(worst_chain, fmax(fabsl(sc[0] - sinl(exact)), fabsl(sc[1] - cosl(exact))));
+    }
+    printf("chain of %d shifts %.3f (units of 2^-52, worst of %ld)\n", TRIG_CHAIN_MAX, worst_chain / 0x1p-52, CHAINS);
+    if (!(worst_chain <= CHAIN_LIMIT)) {
+        printf("trig shift: a chain's error %.3g beyond %.3g\n", worst_chain, CHAIN_LIMIT);
         return 1;
     }
     /* the trig entry points give the plain ones' results bit for bit */

@@ -21,8 +21,11 @@
                             * own h^5 law (at most this much): the starting guess can be far off where a
                             * force law begins at 0 (Hertz's delta^1.5 at first contact) */
 #define TRIG_SHIFT_MAX 0.0625 /* a stage's angle within this of the step start's (rad): its sine and cosine
-                               * come from the start's (shifted_trig), beyond it from libm */
+                               * come from the start's (stage_trig), beyond it from libm */
 #define TRIG_SHIFT_SHORT 0x1p-10 /* ... within this, by shorter series (contact steps move the angles by 1e-5) */
+#define TRIG_CHAIN_MAX 6  /* an accepted step's end takes its sines and cosines from its start's this many times
+                           * in a row at most, then from libm: each shift adds at most 0.51 units of 2^-52, so
+                           * the chain stays within 3.6 units, under libm's 4 at an angle rounded to a double */
 
 /* Dormand and Prince's tableau, its error weights and its dense-output weights. */
 static const double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
@@ -69,39 +72,51 @@ static void watched(ig_dopri5 *r, double t, const double *y, double *g)
     watched_trig(r, t, y, trig, g);
 }
 
-/* sin(q + d) and cos(q + d) into out[0], out[1] from s = sin q and c = cos q, as
- * s + (s (cos d - 1) + c sin d) and c + (c (cos d - 1) - s sin d), with cos d - 1 and sin d
- * by their Taylor series: to d^8 and d^9 for |d| <= TRIG_SHIFT_MAX, where the first terms
- * left out, d^10 / 10! and d^11 / 11!, are below 3e-19 and 3e-21; to d^4 and d^5 for
- * |d| <= TRIG_SHIFT_SHORT, where d^6 / 6! and d^7 / 7! are below 3e-21 and 3e-25. Either is far
- * under an ulp of the result: it is libm's to about an ulp (the start's own rounding and the
- * sum's), at a fraction of the cost. */
-static inline void shifted_trig(double s, double c, double d, double *out)
+/* cos d - 1 and sin d by their Taylor series: to d^8 and d^9 for |d| <= TRIG_SHIFT_MAX, where
+ * the first terms left out, d^10 / 10! and d^11 / 11!, are below 3e-19 and 3e-21; to d^4 and
+ * d^5 for |d| <= TRIG_SHIFT_SHORT, where d^6 / 6! and d^7 / 7! are below 3e-21 and 3e-25. */
+static inline void shift_series_long(double d, double *cm1, double *sd)
 {
     const double z = d * d;
-    double cm1, sd;
-    if (fabs(d) <= TRIG_SHIFT_SHORT) {
-        cm1 = z * (-1.0 / 2 + z * (1.0 / 24));
-        sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120));
-    } else {
-        cm1 = z * (-1.0 / 2 + z * (1.0 / 24 + z * (-1.0 / 720 + z * (1.0 / 40320))));
-        sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120 + z * (-1.0 / 5040 + z * (1.0 / 362880))));
-    }
+    *cm1 = z * (-1.0 / 2 + z * (1.0 / 24 + z * (-1.0 / 720 + z * (1.0 / 40320))));
+    *sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120 + z * (-1.0 / 5040 + z * (1.0 / 362880))));
+}
+
+static inline void shift_series_short(double d, double *cm1, double *sd)
+{
+    const double z = d * d;
+    *cm1 = z * (-1.0 / 2 + z * (1.0 / 24));
+    *sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120));
+}
+
+/* sin(q + d) and cos(q + d) into out[0], out[1] from s = sin q, c = cos q and the series of d, as
+ * s + (s (cos d - 1) + c sin d) and c + (c (cos d - 1) - s sin d). Either series is far under an
+ * ulp of the result: it is libm's to about an ulp (the start's own rounding and the sum's), at a
+ * fraction of the cost. */
+static inline void rotate(double s, double c, double cm1, double sd, double *out)
+{
     out[0] = s + (s * cm1 + c * sd);
     out[1] = c + (c * cm1 - s * sd);
 }
 
 /* The sines and cosines of the angles of y = y0 + dy (the angles are y[0 .. MODEL_NQ)), from
- * y0's in trig0. */
+ * y0's in trig0: by the short series for |dy| <= TRIG_SHIFT_SHORT, the long one up to
+ * TRIG_SHIFT_MAX, libm beyond. */
 static inline void stage_trig(const double *trig0, const double *dy, const double *y, double *trig)
 {
     for (int i = 0; i < MODEL_NQ; ++i) {
-        if (fabs(dy[i]) <= TRIG_SHIFT_MAX) {
-            shifted_trig(trig0[2 * i], trig0[2 * i + 1], dy[i], trig + 2 * i);
+        const double d = dy[i], a = fabs(d);
+        double cm1, sd;
+        if (a <= TRIG_SHIFT_SHORT) {
+            shift_series_short(d, &cm1, &sd);
+        } else if (a <= TRIG_SHIFT_MAX) {
+            shift_series_long(d, &cm1, &sd);
         } else {
             trig[2 * i] = sin(y[i]);
             trig[2 * i + 1] = cos(y[i]);
+            continue;
         }
+        rotate(trig0[2 * i], trig0[2 * i + 1], cm1, sd, trig + 2 * i);
     }
 }
 
@@ -156,6 +171,7 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
         r->directions[k] = directions[k];
     }
     model_trig(r->y, r->trig);
+    r->trig_chain = 0;
     if (rhs_trig(r, t0, r->y, r->trig, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
     r->h = first_step(r, r->k[1], r->k[2]);
     if (h_hint > 0.0) r->h = fmin(r->h, h_hint);
@@ -183,8 +199,9 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
 }
 
 /* The stages of a step of size h from (t, y); the new state in y1 with its sines and cosines
- * in trig1, and the error norm. The inner stages take their angles' sines and cosines from
- * the step start's (stage_trig); the end point, which the next step starts from, from libm. */
+ * in trig1, and the error norm. The stages take their angles' sines and cosines from the step
+ * start's (stage_trig); the end point too while r->trig_chain < TRIG_CHAIN_MAX, else from libm
+ * (the chain of shifts from the last libm values is kept short). */
 static int attempt(ig_dopri5 *r, double h, double *y1, double *trig1, double *err)
 {
     double (*k)[N] = r->k, dy[N], tmp[N], trig[MODEL_NTRIG];
@@ -211,7 +228,12 @@ static int attempt(ig_dopri5 *r, double h, double *y1, double *trig1, double *er
     for (int i = 0; i < N; ++i) {
         y1[i] = y[i] + h * (a71 * k[0][i] + a73 * k[2][i] + a74 * k[3][i] + a75 * k[4][i] + a76 * k[5][i]);
     }
-    model_trig(y1, trig1);
+    if (r->trig_chain < TRIG_CHAIN_MAX) {
+        for (int i = 0; i < MODEL_NQ; ++i) dy[i] = y1[i] - y[i];  /* exact where y1 is within 2x of y */
+        stage_trig(r->trig, dy, y1, trig1);
+    } else {
+        model_trig(y1, trig1);
+    }
     if (rhs_trig(r, t + h, y1, trig1, k[6]) != 0) return -1;
     double num = 0.0, den = 0.0;  /* stiffness estimate: |f(y1) - f(y6)| / |y1 - y6| */
     for (int i = 0; i < N; ++i) {
@@ -377,6 +399,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         memcpy(r->y, y1, sizeof r->y);
         memcpy(r->trig_old, r->trig, sizeof r->trig);
         memcpy(r->trig, trig1, sizeof r->trig);
+        r->trig_chain = r->trig_chain < TRIG_CHAIN_MAX ? r->trig_chain + 1 : 0;
         memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
         if (r->rejected) h_new = fmin(h_new, h);
         const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
@@ -436,6 +459,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
                 r->t = first;
                 ig_dopri5_interpolate(r, first, r->y);
                 model_trig(r->y, r->trig);
+                r->trig_chain = 0;
             }
             return IG_DOPRI5_ROOT;
         }

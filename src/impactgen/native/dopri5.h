@@ -37,6 +37,7 @@ typedef struct {
     double y[MODEL_NSTATE];
     double trig[MODEL_NTRIG];     /* the sines and cosines of y's angles (model_trig) */
     double trig_old[MODEL_NTRIG]; /* ... and of the last step's start's, y(t_old) */
+    int trig_chain;               /* accepted steps since trig last came from libm (dopri5.c) */
     double k[IG_DOPRI5_STAGES][MODEL_NSTATE];  /* stages; k[0] is f(t, y) (first same as last) */
     double cont[5][MODEL_NSTATE]; /* continuous extension of the last step */
     double log_fac_old;           /* the PI controller's memory: the log of the last accepted error */
