@@ -120,6 +120,13 @@ static inline void stage_trig(const double *trig0, const double *dy, const doubl
     }
 }
 
+/* r->trig from libm at r->y: the chain of shifted end points (TRIG_CHAIN_MAX) starts again. */
+static void trig_from_libm(ig_dopri5 *r)
+{
+    model_trig(r->y, r->trig);
+    r->trig_chain = 0;
+}
+
 static double sign_of(double v)
 {
     return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
@@ -170,8 +177,7 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
         r->events[k] = events[k];
         r->directions[k] = directions[k];
     }
-    model_trig(r->y, r->trig);
-    r->trig_chain = 0;
+    trig_from_libm(r);
     if (rhs_trig(r, t0, r->y, r->trig, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
     r->h = first_step(r, r->k[1], r->k[2]);
     if (h_hint > 0.0) r->h = fmin(r->h, h_hint);
@@ -458,8 +464,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
             if (first < r->t) {
                 r->t = first;
                 ig_dopri5_interpolate(r, first, r->y);
-                model_trig(r->y, r->trig);
-                r->trig_chain = 0;
+                trig_from_libm(r);
             }
             return IG_DOPRI5_ROOT;
         }
