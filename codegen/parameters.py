@@ -109,6 +109,10 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("delta_c", "", "m", "critical deformation", "derived", needs="used"),
     Parameter("P_c", "", "N", "critical load", "derived", needs="used"),
     Parameter("B", "", "1", "Jackson-Green exponent 0.14 exp(23 S_y/E*)", "derived", needs="used"),
+    Parameter("inv_delta_c", "", "1/m", "1/delta_c (the elasto-plastic law multiplies by it)", "derived",
+              needs="used"),
+    Parameter("theta_c", "", "1", "pi a/R of the Jackson-Green law at delta = delta_c: "
+              "pi (delta_c/R)^(1/2) 1.9^(-B/2)", "derived", needs="used"),
     Parameter("y_s", "", "m", "surface level now (moves to where a resting tip lifts off)", "machine"),
     Parameter("delta_m", "", "m", "maximum compression of the current impact", "machine", needs="used"),
     Parameter("delta_r", "", "m", "permanent deformation (set at maximum compression)", "machine",

@@ -153,6 +153,8 @@ def test_analytic_jacobian_matches_central_differences(spec):
               "g": 9.81, "E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0,
               "C_j": 1.6, "B": 0.175, "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084,
               "mu": 0.2, "eps": 1e-3}
+    values.update(inv_delta_c=1 / values["delta_c"],  # as model_derive makes them
+                  theta_c=np.pi * np.sqrt(values["delta_c"] / values["R"]) * 1.9 ** (-values["B"] / 2))
     for name in model.param_names:
         if name in values:  # the constants the laws read (not the materials they come from)
             setattr(p, name, values[name])
@@ -182,8 +184,9 @@ def test_analytic_jacobian_matches_central_differences(spec):
 
 
 def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
-    """The C law takes its fractional powers from one exponential (w^(1/180) products); it must
-    agree with the reference engine's w ** k to rounding over the whole elasto-plastic range."""
+    """The C law takes its fractional powers from one exponential (w^(1/180) products) and the
+    contact radius as theta_c w^((1 + B)/2); it must agree with the reference engine's w ** k
+    and a = (R delta (w / 1.9)^B)^(1/2) to rounding over the whole elasto-plastic range."""
     from impactgen.build import compile_model
     from impactgen.engines import model_spec
     from impactgen.model_params import fill_params

@@ -2,6 +2,8 @@
 derived constants (the rules that once lived in Python, with the same assertions)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -56,6 +58,9 @@ def test_the_c_derives_the_same_constants_as_the_expressions(paper_scene):
     c = contact_constants(paper_scene)
     for name in ("E_star", "R", "delta_c", "P_c", "C_j", "B"):
         assert getattr(probe.params, name) == pytest.approx(getattr(c, name), rel=1e-14), name
+    # the two that only spare the elasto-plastic law work per call
+    assert probe.params.inv_delta_c == pytest.approx(1 / c.delta_c, rel=1e-15)
+    assert probe.params.theta_c == pytest.approx(math.pi * math.sqrt(c.delta_c / c.R) * 1.9 ** (-c.B / 2), rel=1e-14)
 
 
 def test_reloading_rules_follow_the_curve_it_left(paper_scene):

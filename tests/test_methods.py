@@ -72,7 +72,12 @@ def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
     rk, auto, bdf = (impactgen.simulate(scene, method=m) for m in ("dopri5", "auto", "bdf"))
     assert not rk.success and "max_steps" in rk.message
     assert auto.success, auto.message
-    assert auto.stats["nstiff"] >= 1 and auto.stats["nsteps"] < bdf.stats["nsteps"]
+    assert auto.stats["nstiff"] >= 1
+    if "solver.t_end" in overrides:  # the resting tip: the pair's steps before BDF are cheap ones
+        assert auto.stats["nsteps"] < bdf.stats["nsteps"]
+    # (the stuck tip's step counts turn on the last bits where its layer is not resolved: over
+    # four starts u2 (1 + k 1e-4) "auto" took 260 to 2634 steps and "bdf" 610 to 4119, each
+    # fewer in some starts; docs/model.md)
     assert len(auto.impacts) == len(bdf.impacts)
     assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-4)
     # The stuck tip's layer (eps = 1e-10 m/s) is as thin as atol (1e-10): the motion after it is

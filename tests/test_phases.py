@@ -159,9 +159,10 @@ def test_an_impact_finer_than_the_tolerance_resolves_carries_a_warning():
 
 def test_a_run_whose_energy_budget_does_not_close_says_so():
     """Stiff regularized friction at a loose tolerance: BDF's error test passes while the
-    works miss the change of kinetic energy by 5 % of T0 (docs/model.md). The run is not a
-    failure, but its numbers must not be silent."""
-    loose = {"solver.rtol": 1e-8, "solver.atol": 1e-10, "contact.friction": 2.0, "contact.friction_eps": 1e-10}
+    works miss the change of kinetic energy by 9 % to 21 % of T0 (eps = 1e-11 over four
+    nearby starts; at eps = 1e-10 how far it misses turns on the last bits: docs/model.md).
+    The run is not a failure, but its numbers must not be silent."""
+    loose = {"solver.rtol": 1e-8, "solver.atol": 1e-10, "contact.friction": 2.0, "contact.friction_eps": 1e-11}
     result = impactgen.simulate(impactgen.load_scene(PAPER, overrides=loose), method="bdf")
     assert result.status == "ok"
     assert abs(result.summary["energy"]["residual"]) > 0.01 * result.summary["T0"]

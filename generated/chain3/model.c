@@ -61,14 +61,14 @@ static inline double normal_force(double delta, const model_params *p)
         return F;
     }
     case MODEL_PHASE_ELASTOPLASTIC: {  /* Jackson-Green elasto-plastic compression (Eq. 10) */
-        const double R = p->R;
         const double C_j = p->C_j;
-        const double delta_c = p->delta_c;
         const double P_c = p->P_c;
         const double B = p->B;
+        const double inv_delta_c = p->inv_delta_c;
+        const double theta_c = p->theta_c;
 
         if (!(delta > 0)) return 0.0;
-        const double w = delta/delta_c;
+        const double w = delta*inv_delta_c;
         const double ln_w = log(w);
         const double sqrt_w = sqrt(w);
         const double r = exp((1.0/180.0)*ln_w);
@@ -79,8 +79,8 @@ static inline double normal_force(double delta, const model_params *p)
         const double w_5_12 = sqrt_w/(r*r10*r4);
         const double w_5_9 = r10*sqrt_w;
         const double w_11_10 = r10*r8*w;
-        const double a = sqrt(R)*sqrt(delta)*exp((1.0/2.0)*B*(ln_w - log(19.0/10.0)));
-        const double H_over_S_y = 0.92*cos(3.14159265358979323846*a/R) + 1.92;
+        const double theta = theta_c*exp(ln_w*((1.0/2.0)*B + 1.0/2.0));
+        const double H_over_S_y = 0.92*cos(theta) + 1.92;
         const double F = P_c*(sqrt_w*w*exp(-0.17*w_5_12) + 4*H_over_S_y*w_11_10*(1 - exp(-1.0/78.0*w_5_9))/C_j);
 
         return F;
@@ -119,24 +119,21 @@ static double normal_force_slope(double delta, const model_params *p)
         return dF;
     }
     case MODEL_PHASE_ELASTOPLASTIC: {
-        const double R = p->R;
         const double C_j = p->C_j;
-        const double delta_c = p->delta_c;
         const double P_c = p->P_c;
         const double B = p->B;
+        const double inv_delta_c = p->inv_delta_c;
+        const double theta_c = p->theta_c;
 
         if (!(delta > 0)) return 0.0;
-        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)/pow(delta_c, 5.0/12.0));
-        const double s1 = sqrt(delta);
-        const double s2 = exp(-1.0/78.0*pow(delta, 5.0/9.0)/pow(delta_c, 5.0/9.0));
-        const double s3 = (1.0/C_j);
-        const double s4 = (1.0/2.0)*B;
-        const double s5 = 3.14159265358979323846*exp(s4*(log(delta/delta_c) - log(19.0/10.0)))/sqrt(R);
-        const double s6 = s1*s5;
-        const double s7 = s3*(0.92*cos(s6) + 1.92);
-        const double s8 = (1 - s2)/pow(delta_c, 11.0/10.0);
-        const double s9 = s5/s1;
-        const double dF = P_c*((10.0/351.0)*pow(delta, 59.0/90.0)*s2*s7/pow(delta_c, 149.0/90.0) - 0.07083333333333335*pow(delta, 11.0/12.0)*s0/pow(delta_c, 23.0/12.0) - 3.68*pow(delta, 11.0/10.0)*s3*s8*(s4*s9 + (1.0/2.0)*s9)*sin(s6) + (22.0/5.0)*pow(delta, 1.0/10.0)*s7*s8 + (3.0/2.0)*s0*s1/(delta_c*sqrt(delta_c)));
+        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)*pow(inv_delta_c, 5.0/12.0));
+        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)*pow(inv_delta_c, 5.0/9.0));
+        const double s2 = (1.0/C_j);
+        const double s3 = (1.0/2.0)*B + 1.0/2.0;
+        const double s4 = theta_c*exp(s3*log(delta*inv_delta_c));
+        const double s5 = s2*(0.92*cos(s4) + 1.92);
+        const double s6 = pow(delta, 1.0/10.0)*pow(inv_delta_c, 11.0/10.0)*(1 - s1);
+        const double dF = P_c*((10.0/351.0)*pow(delta, 59.0/90.0)*pow(inv_delta_c, 149.0/90.0)*s1*s5 - 0.07083333333333335*pow(delta, 11.0/12.0)*pow(inv_delta_c, 23.0/12.0)*s0 + (3.0/2.0)*sqrt(delta)*(inv_delta_c*sqrt(inv_delta_c))*s0 - 3.68*s2*s3*s4*s6*sin(s4) + (22.0/5.0)*s5*s6);
 
         return dF;
     }

@@ -80,6 +80,8 @@ typedef struct {
     double delta_c;  /* critical deformation, m */
     double P_c;  /* critical load, N */
     double B;  /* Jackson-Green exponent 0.14 exp(23 S_y/E*) */
+    double inv_delta_c;  /* 1/delta_c (the elasto-plastic law multiplies by it), 1/m */
+    double theta_c;  /* pi a/R of the Jackson-Green law at delta = delta_c: pi (delta_c/R)^(1/2) 1.9^(-B/2) */
     double y_s;  /* surface level now (moves to where a resting tip lifts off), m */
     double delta_m;  /* maximum compression of the current impact, m */
     double delta_r;  /* permanent deformation (set at maximum compression), m */

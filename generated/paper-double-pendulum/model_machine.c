@@ -42,6 +42,8 @@ static const char *const param_names[MODEL_NPARAM] = {
     "delta_c",
     "P_c",
     "B",
+    "inv_delta_c",
+    "theta_c",
     "y_s",
     "delta_m",
     "delta_r",
@@ -64,6 +66,8 @@ static const char *const param_keys[MODEL_NPARAM] = {
     "surface.height_initial",
     "contact.friction",
     "contact.friction_eps",
+    "",
+    "",
     "",
     "",
     "",
@@ -98,6 +102,8 @@ static const char *const param_units[MODEL_NPARAM] = {
     "m",
     "N",
     "1",
+    "1/m",
+    "1",
     "m",
     "m",
     "m",
@@ -126,13 +132,15 @@ static const char *const param_docs[MODEL_NPARAM] = {
     "critical deformation, m",
     "critical load, N",
     "Jackson-Green exponent 0.14 exp(23 S_y/E*)",
+    "1/delta_c (the elasto-plastic law multiplies by it), 1/m",
+    "pi a/R of the Jackson-Green law at delta = delta_c: pi (delta_c/R)^(1/2) 1.9^(-B/2)",
     "surface level now (moves to where a resting tip lifts off), m",
     "maximum compression of the current impact, m",
     "permanent deformation (set at maximum compression), m",
     "unloading radius (set at maximum compression), m"
 };
 static const int param_kinds[MODEL_NPARAM] = {
-0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2
+0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2
 };
 
 double *model_param_slot(model_params *p, int k)
@@ -160,10 +168,12 @@ double *model_param_slot(model_params *p, int k)
     case 19: return &p->delta_c;
     case 20: return &p->P_c;
     case 21: return &p->B;
-    case 22: return &p->y_s;
-    case 23: return &p->delta_m;
-    case 24: return &p->delta_r;
-    case 25: return &p->R_res;
+    case 22: return &p->inv_delta_c;
+    case 23: return &p->theta_c;
+    case 24: return &p->y_s;
+    case 25: return &p->delta_m;
+    case 26: return &p->delta_r;
+    case 27: return &p->R_res;
     default: return NULL;
     }
 }
@@ -262,12 +272,16 @@ int model_derive(model_params *p, const char **range_text)
     const double delta_c = (1.0/4.0)*(3.14159265358979323846*3.14159265358979323846)*(C_j*C_j)*R*(S_y*S_y)/(E_star*E_star);
     const double P_c = (1.0/6.0)*(3.14159265358979323846*3.14159265358979323846*3.14159265358979323846)*(C_j*C_j*C_j)*(R*R)*(S_y*S_y*S_y)/(E_star*E_star);
     const double B = 0.14*exp(23*S_y/E_star);
+    const double inv_delta_c = (1.0/delta_c);
+    const double theta_c = 3.14159265358979323846*sqrt(delta_c)*exp(-1.0/2.0*B*log(19.0/10.0))/sqrt(R);
     p->E_star = E_star;
     p->R = R;
     p->C_j = C_j;
     p->delta_c = delta_c;
     p->P_c = P_c;
     p->B = B;
+    p->inv_delta_c = inv_delta_c;
+    p->theta_c = theta_c;
     (void)S_y;
     (void)nu;
     return MODEL_PARAMS_OK;

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define MODEL_API_VERSION 1
-#define MODEL_STRUCTURE_HASH "57e36ad5c86d9f32"
+#define MODEL_STRUCTURE_HASH "7f89ab7f176c14af"
 
 /* Thresholds of the machine (codegen/machine.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */
@@ -76,7 +76,7 @@ enum {
 };
 
 #define MODEL_PARAMS_OK (-1)
-#define MODEL_NPARAM 26
+#define MODEL_NPARAM 28
 
 /* The machine's state. Everything it decides lives here and in the parameters it sets
  * (phase, y_s, delta_m, delta_r, R_res). */
@@ -111,8 +111,8 @@ int model_param_kind(int k);
 /* Check the inputs against their physical ranges: MODEL_PARAMS_OK, or the index k of the
  * first one out of range, with its range in *range_text (model_param_key(k) names it). */
 int model_check(const model_params *p, const char **range_text);
-/* Check the inputs, then fill the derived contact constants (E*, R, C_j, delta_c, P_c, B)
- * from the materials and the tip radius. Returns as model_check. */
+/* Check the inputs, then fill the derived contact constants (E*, R, C_j, delta_c, P_c, B, and
+ * the elasto-plastic law's 1/delta_c and theta_c) from the materials and the tip radius. Returns as model_check. */
 int model_derive(model_params *p, const char **range_text);
 
 /* Begin at (t, y): sets the surface level (the tip's height when p->surface_initial), the

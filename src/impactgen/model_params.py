@@ -1,8 +1,9 @@
 """Fill a compiled model's parameter struct from a scene, through the one parameter table.
 
 The inputs are read from the scene as codegen/parameters.py says; the derived contact
-constants (E*, R, delta_c, P_c, C_j, B) are filled by the generated C (`model_derive`) from
-the same sympy expressions the force laws are printed from. The phase machine sets the rest.
+constants (E*, R, delta_c, P_c, C_j, B, and the elasto-plastic law's 1/delta_c and theta_c)
+are filled by the generated C (`model_derive`) from the same sympy expressions the force laws
+are printed from. The phase machine sets the rest.
 """
 from __future__ import annotations
 

@@ -26,6 +26,8 @@ static model_params paper_params(void)
     p.delta_c = R * (p0 / E_star) * (p0 / E_star);
     p.P_c = 4.0 / 3.0 * (R / E_star) * (R / E_star) * p0 * p0 * p0;
     p.B = 0.14 * exp(23.0 * S_y / E_star);
+    p.inv_delta_c = 1.0 / p.delta_c;
+    p.theta_c = 3.14159265358979323846 * sqrt(p.delta_c / R) * exp(-p.B / 2.0 * log(1.9));
     p.R_res = R; p.mu = 0.2; p.eps = 1e-6;
     p.phase = MODEL_PHASE_ELASTIC;
     return p;
