@@ -76,12 +76,13 @@ def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
     if "solver.t_end" in overrides:  # the resting tip: the pair's steps before BDF are cheap ones
         assert auto.stats["nsteps"] < bdf.stats["nsteps"]
     # (the stuck tip's step counts turn on the last bits where its layer is not resolved: over
-    # four starts u2 (1 + k 1e-4) "auto" took 260 to 2634 steps and "bdf" 610 to 4119, each
+    # four starts u2 (1 + k 1e-4) "auto" took 353 to 3374 steps and "bdf" 610 to 3452, each
     # fewer in some starts; docs/model.md)
     assert len(auto.impacts) == len(bdf.impacts)
     assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-4)
     # The stuck tip's layer (eps = 1e-10 m/s) is as thin as atol (1e-10): the motion after it is
-    # not resolved at these tolerances, and BDF alone closes the energy budget only to 5 % of T0.
+    # not resolved at these tolerances, and BDF alone closes the energy budget only to between
+    # 0.013 % and 7.6 % of T0 over four nearby starts.
     # Where the budget does not close the result says so; test_auto_and_bdf_agree_on_a_resolved_stuck_tip
     # holds the physics at tolerances that resolve it.
     closes = abs(auto.summary["energy"]["residual"]) < 1e-4 * auto.summary["T0"]

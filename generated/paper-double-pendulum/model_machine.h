@@ -112,7 +112,8 @@ int model_param_kind(int k);
  * first one out of range, with its range in *range_text (model_param_key(k) names it). */
 int model_check(const model_params *p, const char **range_text);
 /* Check the inputs, then fill the derived contact constants (E*, R, C_j, delta_c, P_c, B, and
- * the elasto-plastic law's 1/delta_c and theta_c) from the materials and the tip radius. Returns as model_check. */
+ * the elasto-plastic law's 1/delta_c and theta_c) from the materials and the tip radius.
+ * Returns as model_check. */
 int model_derive(model_params *p, const char **range_text);
 
 /* Begin at (t, y): sets the surface level (the tip's height when p->surface_initial), the
