@@ -127,9 +127,10 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         if overrides:
             scene = scene.replace(overrides)
     times = _checked_times(t_eval, scene) if t_eval is not None else None
-    for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
-        if flag is not True and flag is not False and not isinstance(flag, np.bool_):
-            raise SceneError(name, f"expected True or False, got {flag!r}")
+    if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
+        for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
+            if flag is not True and flag is not False and not isinstance(flag, np.bool_):
+                raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
         return phases.run(_model(*_structure(scene)), scene, t_eval=times, dense_output=bool(dense_output),
                           record_steps=bool(record_steps))

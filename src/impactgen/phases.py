@@ -27,6 +27,7 @@ from .session import CvodeSession, Machine, MachineRun, Segment
 from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
+_yield_scale = partial(tuple.__new__, YieldScale)  # YieldScale._make without its Python frame
 
 
 def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
@@ -46,19 +47,20 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     m = machine.state
     solver = scene.solver
     polynomials = dense_output or t_eval is not None
-    session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
+    if polynomials is not session.dense:
+        session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
     start = session.begin(params, scene)
     state0 = m.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         first_row, tallied = session.without_run()
-        session.close(scene)
+        session.close()
         return _no_impact_at_start(scene, model, session.y0.copy(), first_row.tolist(),
                                    start == lib.MODEL_START_ALONG, started, tallied)
     in_contact = start == lib.MODEL_START_CONTACT
     ran = session.run(params, solver.t_max if solver.t_end is None else solver.t_end, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
     impacts = _impacts(machine, ran.segments, in_contact)
-    status, message = _status(lib, scene, machine, ran, impacts)
+    status, message = ("ok", "") if ran.flag == lib.IG_RUN_DONE else _status(lib, scene, machine, ran, impacts)
 
     trajectory = partial(_trajectory, ran, state0, m.state, session.output_index)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
@@ -69,11 +71,10 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
     counters = session.counters()
     if status != "failed":  # a failed integrator is not handed to the next run
-        session.close(scene)
-    stats = partial(_stats, session.stats_names, counters, segments=len(ran.segments), samples=len(ran.t),
-                    wall_s=time.perf_counter() - started)
+        session.close()
+    stats = partial(_stats, session.stats_names, counters, len(ran.segments), len(ran.t), time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
-    contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
+    contact = _yield_scale((params.R, params.delta_c, params.B)) if model.spec.plastic else None  # as derived in C
     spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries)
@@ -100,13 +101,13 @@ def _phase_labels(segments: list[Segment], n_samples: int, state0: int, state_en
 
 def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) -> list[Impact]:
     """The impacts, from the machine's record of each segment's end."""
-    impacts = [Impact(t_start=0.0, i_start=0)] if contact_at_start else []
+    impacts = [Impact(0.0, 0)] if contact_at_start else []
     label, free = machine.slip_label, machine.free
     BEGIN, SLIP, MAX_COMPRESSION, END = machine.acts
     for seg in segments:
         state, next_state, t, act = seg.state, seg.next_state, seg.t, seg.act
         if act & BEGIN:
-            impacts.append(Impact(t_start=t, i_start=seg.sample))
+            impacts.append(Impact(t, seg.sample))
         if not impacts:  # a flight before the first impact
             continue
         impact = impacts[-1]
@@ -132,9 +133,11 @@ def _spans(machine: Machine, event_names: tuple[str, ...], segments: list[Segmen
     return spans
 
 
-def _stats(names: tuple[str, ...], counters: tuple[int, ...], **more: Any) -> dict[str, Any]:
-    """The integrator's counters by name, then `more` (made when first asked for)."""
-    return {**dict(zip(names, counters)), **more}
+def _stats(names: tuple[str, ...], counters: tuple[int, ...], segments: int, samples: int,
+           wall_s: float) -> dict[str, Any]:
+    """The integrator's counters by name, then the run's segments, samples and wall time (made
+    when first asked for)."""
+    return {**dict(zip(names, counters)), "segments": segments, "samples": samples, "wall_s": wall_s}
 
 
 def _status(lib, scene: Scene, machine: Machine, ran: MachineRun, impacts: list[Impact]) -> tuple[str, str]:

@@ -102,6 +102,9 @@ class MachineRun(NamedTuple):
     summaries: TallyRecords  # over the whole run, over its first impact (ig_summarize)
 
 
+_make_run = partial(tuple.__new__, MachineRun)  # MachineRun._make without its Python frame
+
+
 class CvodeSession:
     """One CVODE integrator for a whole simulation, with the run's C buffers (the phase
     machine, the tolerances, the samples). `open` reuses an idle one of the same model and
@@ -109,24 +112,22 @@ class CvodeSession:
 
     _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
 
-    @staticmethod
-    def _pool_key(model: CompiledModel, scene: Scene) -> tuple:
-        return model.lib, scene.solver.method  # one library per build, hashed by identity
-
     @classmethod
     def open(cls, model: CompiledModel, scene: Scene) -> "CvodeSession":
         """An idle session of this model and method, or a new one; `begin` a run on it."""
+        key = model.lib, scene.solver.method  # one library per build, hashed by identity
         try:
-            return cls._idle.get(cls._pool_key(model, scene), []).pop()
+            return cls._idle.get(key, []).pop()
         except IndexError:
-            return cls(model, scene)
+            return cls(model, scene, key)
 
-    def close(self, scene: Scene) -> None:
+    def close(self) -> None:
         """Hand the integrator back for the next run (only after a run that ended normally)."""
-        self._idle.setdefault(self._pool_key(self.model, scene), []).append(self)
+        self._idle.setdefault(self.pool_key, []).append(self)
 
-    def __init__(self, model: CompiledModel, scene: Scene):
+    def __init__(self, model: CompiledModel, scene: Scene, pool_key: tuple):
         self.model = model
+        self.pool_key = pool_key  # where `close` hands it back (`open` made it)
         ffi = model.ffi
         self.method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5, _AUTO
         self.analytic = 1 if uses_jacobian(model, scene) else 0
@@ -225,7 +226,8 @@ class CvodeSession:
             k = self.n_out[0]
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            segments.extend(self._segments(base))
+            rows = self._segment_record.iter_unpack(self._segment_bytes[:self.n_segments[0] * self._segment_record.size])
+            segments += map(_make_segment, rows if not base else [(r[0], base + r[1]) + r[2:] for r in rows])
             if with_params:
                 new = ffi.new
                 segment_params.extend(new("model_params *", self.segments[j].params) for j in range(self.n_segments[0]))
@@ -241,8 +243,8 @@ class CvodeSession:
         else:
             t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
-        return MachineRun(t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
-                          self._summarized())
+        return _make_run((t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
+                          self._summarized()))
 
     def _summarized(self) -> TallyRecords:
         """The run's two summaries, tallied in C now (the session's buffers serve the next
@@ -254,13 +256,6 @@ class CvodeSession:
         """The outputs at the start, and the summaries of a run that ends where it begins
         (the tip touches the surface without pressing in: no impact)."""
         return self.out_samples[0].copy(), self._summarized()
-
-    def _segments(self, base: int) -> list[Segment]:
-        """The segment records of the last ig_run call, their sample indices from `base` on."""
-        rows = self._segment_record.iter_unpack(self._segment_bytes[:self.n_segments[0] * self._segment_record.size])
-        if base:
-            rows = [(r[0], base + r[1]) + r[2:] for r in rows]
-        return list(map(_make_segment, rows))
 
     def outputs(self, params, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         ffi, model = self.model.ffi, self.model
