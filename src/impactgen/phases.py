@@ -47,8 +47,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     m = machine.state
     solver = scene.solver
     polynomials = dense_output or t_eval is not None
-    if polynomials is not session.dense:
-        session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
+    session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
     start = session.begin(params, scene)
     state0 = m.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
@@ -60,7 +59,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     ran = session.run(params, solver.t_max if solver.t_end is None else solver.t_end, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
     impacts = _impacts(machine, ran.segments, in_contact)
-    status, message = ("ok", "") if ran.flag == lib.IG_RUN_DONE else _status(lib, scene, machine, ran, impacts)
+    status, message = _status(lib, scene, machine, ran, impacts)
 
     trajectory = partial(_trajectory, ran, state0, m.state, session.output_index)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
