@@ -36,6 +36,7 @@ struct ig_solver {
     int continued;    /* a segment of this run has begun: the next may start from its last step */
     int dirs[MODEL_NEVENT];
     N_Vector y;
+    double *y_data;   /* y's array (a serial vector keeps it): read and written every step */
     N_Vector abstol;
     N_Vector dky;     /* one derivative of the interpolating polynomial (dense output) */
     SUNMatrix A;
@@ -190,6 +191,7 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
         SUNContext_PushErrHandler(s->ctx, on_error, s);
 #endif
         s->y = N_VNew_Serial(MODEL_NSTATE, s->ctx);
+        if (s->y) s->y_data = N_VGetArrayPointer(s->y);
         s->abstol = N_VNew_Serial(MODEL_NSTATE, s->ctx);
         s->dky = N_VNew_Serial(MODEL_NSTATE, s->ctx);
         /* fused vector operations: fewer calls per step for CVODE's vectors, cloned from y */
@@ -357,7 +359,7 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
     s->segment_steps = 0;
     s->message[0] = '\0';
 
-    memcpy(N_VGetArrayPointer(s->y), y0, sizeof(double) * MODEL_NSTATE);
+    memcpy(s->y_data, y0, sizeof(double) * MODEL_NSTATE);
     if (s->rk) {
         /* the step the pair proposed at the end of the segment before in this run (not after
          * CVODE took over) */
@@ -476,7 +478,7 @@ static int step_dopri5(ig_solver *s, double *t_now, int *roots_found)
     }
     s->segment_steps++;
     *t_now = s->rk->t;
-    memcpy(N_VGetArrayPointer(s->y), s->rk->y, sizeof(double) * MODEL_NSTATE);
+    memcpy(s->y_data, s->rk->y, sizeof(double) * MODEL_NSTATE);
     if (flag == IG_DOPRI5_ROOT) {
         s->active = 0;
         return IG_ROOT;
@@ -538,7 +540,7 @@ static int step_once(ig_solver *s, double *t_now, int *roots_found)
 static int write_sample(ig_solver *s, double t, int k, double *t_buf, double *y_buf, double *dense_buf)
 {
     t_buf[k] = t;
-    memcpy(y_buf + (size_t)k * MODEL_NSTATE, N_VGetArrayPointer(s->y), sizeof(double) * MODEL_NSTATE);
+    memcpy(y_buf + (size_t)k * MODEL_NSTATE, s->y_data, sizeof(double) * MODEL_NSTATE);
     if (dense_buf != NULL && write_dense(s, t, dense_buf + (size_t)k * s->dense_terms * MODEL_NSTATE) != 0) {
         s->active = 0;
         set_message(s, "CVodeGetDky could not give the interpolating polynomial of the step");
@@ -732,7 +734,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
             if (every_step && *n_written >= capacity) return IG_BUFFER_FULL;
             flag = step_once(s, t, roots_found);
             if (flag < 0) return flag;
-            memcpy(y, N_VGetArrayPointer(s->y), sizeof(double) * MODEL_NSTATE);
+            memcpy(y, s->y_data, sizeof(double) * MODEL_NSTATE);
             model_machine_observe(m, p, *t, y);
             if (every_step || flag != IG_STEPPED) {
                 const int k = *n_written;

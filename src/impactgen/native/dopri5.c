@@ -127,6 +127,18 @@ static void trig_from_libm(ig_dopri5 *r)
     r->trig_chain = 0;
 }
 
+/* The smaller and larger of two finite numbers: fmin and fmax are calls into libm (their NaN
+ * rules keep GCC from inlining them), and the step-size controller takes several per step. */
+static inline double smaller(double a, double b)
+{
+    return a < b ? a : b;
+}
+
+static inline double larger(double a, double b)
+{
+    return a > b ? a : b;
+}
+
 static double sign_of(double v)
 {
     return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
@@ -205,10 +217,10 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
 }
 
 /* The stages of a step of size h from (t, y); the new state in y1 with its sines and cosines
- * in trig1, and the error norm. The stages take their angles' sines and cosines from the step
+ * in trig1, the sixth stage's state in y6, and the error norm. The stages take their angles' sines and cosines from the step
  * start's (stage_trig); the end point too while r->trig_chain < TRIG_CHAIN_MAX, else from libm
  * (the chain of shifts from the last libm values is kept short). */
-static int attempt(ig_dopri5 *r, double h, double *y1, double *trig1, double *err)
+static int attempt(ig_dopri5 *r, double h, double *y1, double *y6, double *trig1, double *err)
 {
     double (*k)[N] = r->k, dy[N], tmp[N], trig[MODEL_NTRIG];
     const double t = r->t, *y = r->y;
@@ -227,10 +239,10 @@ static int attempt(ig_dopri5 *r, double h, double *y1, double *trig1, double *er
     stage_trig(r->trig, dy, tmp, trig);
     if (rhs_trig(r, t + c5 * h, tmp, trig, k[4]) != 0) return -1;
     for (int i = 0; i < N; ++i) {
-        tmp[i] = y[i] + (dy[i] = h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]));
+        y6[i] = y[i] + (dy[i] = h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]));
     }
-    stage_trig(r->trig, dy, tmp, trig);
-    if (rhs_trig(r, t + h, tmp, trig, k[5]) != 0) return -1;
+    stage_trig(r->trig, dy, y6, trig);
+    if (rhs_trig(r, t + h, y6, trig, k[5]) != 0) return -1;
     for (int i = 0; i < N; ++i) {
         y1[i] = y[i] + h * (a71 * k[0][i] + a73 * k[2][i] + a74 * k[3][i] + a75 * k[4][i] + a76 * k[5][i]);
     }
@@ -241,21 +253,26 @@ static int attempt(ig_dopri5 *r, double h, double *y1, double *trig1, double *er
         model_trig(y1, trig1);
     }
     if (rhs_trig(r, t + h, y1, trig1, k[6]) != 0) return -1;
-    double num = 0.0, den = 0.0;  /* stiffness estimate: |f(y1) - f(y6)| / |y1 - y6| */
-    for (int i = 0; i < N; ++i) {
-        num += (k[6][i] - k[5][i]) * (k[6][i] - k[5][i]);
-        den += (y1[i] - tmp[i]) * (y1[i] - tmp[i]);
-    }
-    r->h_lambda = den > 0.0 ? h * sqrt(num / den) : 0.0;
     double sum = 0.0;
     for (int i = 0; i < N; ++i) {
         const double e = h * (e1 * k[0][i] + e3 * k[2][i] + e4 * k[3][i] + e5 * k[4][i] + e6 * k[5][i] + e7 * k[6][i]);
-        const double a = fabs(y[i]), b = fabs(y1[i]);  /* (fmax is a call into libm) */
-        const double sk = r->atol[i] + r->rtol * (a > b ? a : b);
+        const double sk = r->atol[i] + r->rtol * larger(fabs(y[i]), fabs(y1[i]));
         sum += (e / sk) * (e / sk);
     }
     *err = sqrt(sum / N);
     return isfinite(*err) ? 0 : -1;
+}
+
+/* Hairer's stiffness estimate of an accepted step, h |f(y1) - f(y6)| / |y1 - y6| (y6 the
+ * sixth stage's state): made for accepted steps only, the only ones whose estimate counts. */
+static double stiffness_estimate(const ig_dopri5 *r, double h, const double *y1, const double *y6)
+{
+    double num = 0.0, den = 0.0;
+    for (int i = 0; i < N; ++i) {
+        num += (r->k[6][i] - r->k[5][i]) * (r->k[6][i] - r->k[5][i]);
+        den += (y1[i] - y6[i]) * (y1[i] - y6[i]);
+    }
+    return den > 0.0 ? h * sqrt(num / den) : 0.0;
 }
 
 /* The continuous extension of the step just accepted (y still the old state). */
@@ -370,14 +387,14 @@ static int some_unarmed(const ig_dopri5 *r)
 int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
 {
     const double expo = 0.2 - BETA * 0.75;
-    double y1[N], trig1[MODEL_NTRIG], err = 0.0;
+    double y1[N], y6[N], trig1[MODEL_NTRIG], err = 0.0;
     int retries = 0;
     for (;;) {
         double h = r->h;
         if (0.1 * fabs(h) <= fabs(r->t) * DBL_EPSILON || !(h > 0.0)) return IG_DOPRI5_TOO_SMALL;
         const int last = r->t + 1.01 * h >= r->t_stop;
         if (last) h = r->t_stop - r->t;
-        if (attempt(r, h, y1, trig1, &err) != 0) {  /* the right-hand side failed: a smaller step */
+        if (attempt(r, h, y1, y6, trig1, &err) != 0) {  /* the right-hand side failed: a smaller step */
             if (++retries > RHS_RETRIES) return IG_DOPRI5_RHS_FAILED;
             r->netfails++;
             r->h = 0.25 * h;
@@ -389,15 +406,16 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         const double log_err = log(err);
         if (err > 1.0) {  /* rejected: a smaller step */
             r->netfails++;
-            r->h = r->nsteps == 0 ? h * fmax(FAC_MIN_START, SAFE * exp(-0.2 * log_err))
-                                  : h / fmin(1.0 / FAC_MIN, exp(expo * log_err) / SAFE);
+            r->h = r->nsteps == 0 ? h * larger(FAC_MIN_START, SAFE * exp(-0.2 * log_err))
+                                  : h / smaller(1.0 / FAC_MIN, exp(expo * log_err) / SAFE);
             r->rejected = 1;
             continue;
         }
         /* accepted: the PI controller's next step */
-        const double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, exp(expo * log_err - BETA * r->log_fac_old) / SAFE));
+        r->h_lambda = stiffness_estimate(r, h, y1, y6);
+        const double fac = larger(1.0 / FAC_MAX, smaller(1.0 / FAC_MIN, exp(expo * log_err - BETA * r->log_fac_old) / SAFE));
         double h_new = h / fac;
-        r->log_fac_old = fmax(log_err, log(ERR_FLOOR));
+        r->log_fac_old = larger(log_err, log(ERR_FLOOR));
         keep_extension(r, h, y1);
         r->t_old = r->t;
         r->h_old = h;
@@ -407,9 +425,9 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         memcpy(r->trig, trig1, sizeof r->trig);
         r->trig_chain = r->trig_chain < TRIG_CHAIN_MAX ? r->trig_chain + 1 : 0;
         memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
-        if (r->rejected) h_new = fmin(h_new, h);
+        if (r->rejected) h_new = smaller(h_new, h);
         const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
-        r->h = last ? fmax(h_new, r->h) : h_new;  /* a step cut to t_stop proposes what it was cut from */
+        r->h = last ? larger(h_new, r->h) : h_new;  /* a step cut to t_stop proposes what it was cut from */
         r->nsteps++;
         r->rejected = 0;
         if (unstable) {
@@ -425,7 +443,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
     memcpy(g_lo, r->g, sizeof g_lo);
     watched_trig(r, r->t, r->y, r->trig, g_end);
     const int points = some_unarmed(r) ? INSIDE_POINTS : 0;
-    const double tol = ROOT_TOLERANCE * DBL_EPSILON * fmax(fabs(r->t), fabs(r->h_old));
+    const double tol = ROOT_TOLERANCE * DBL_EPSILON * larger(fabs(r->t), fabs(r->h_old));
     for (int j = 1; j <= points + 1; ++j) {
         const double t_hi = j > points ? r->t : r->t_old + r->h_old * j / (points + 1);
         if (j > points) {
@@ -452,7 +470,7 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
                     if (t_root[k] < INFINITY || !crossed(r, k, g_end_now[k])) continue;
                     const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
                     t_root[k] = locate(r, k, t_lo, lo, end, g_end_now[k], tol);
-                    first = fmin(first, t_root[k]);
+                    first = smaller(first, t_root[k]);
                     ++located;
                 }
                 if (located == before || located == r->nevents || first == end) break;

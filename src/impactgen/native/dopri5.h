@@ -45,7 +45,7 @@ typedef struct {
     int nevents, events[MODEL_NEVENT], directions[MODEL_NEVENT];
     double g[MODEL_NEVENT];       /* watched event functions at t */
     double side[MODEL_NEVENT];    /* their last nonzero sign (0: none yet) */
-    double h_lambda;              /* h times the stiffness estimate of the last attempt (Hairer) */
+    double h_lambda;              /* h times the stiffness estimate of the last accepted step (Hairer) */
     int stiff_count, smooth_count;/* consecutive steps beyond and within the stability boundary */
     int stiff;                    /* 1 once the steps are limited by stability, not accuracy */
     long nsteps, nfev, netfails, ngev;
