@@ -39,7 +39,7 @@ def fill_params(model: CompiledModel, scene: Scene):
     ffi = model.ffi
     params = ffi.new("model_params *")  # zeroed: the struct's other fields stay 0 under the layout's pad bytes
     layout, read = _readers(ffi, model.spec.links)
-    layout.pack_into(ffi.buffer(params), 0, *read(scene))
+    ffi.memmove(params, layout.pack(*read(scene)), layout.size)  # (pack_into through ffi.buffer: 0.15 us more)
     derive(model, params)
     return params
 

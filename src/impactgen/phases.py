@@ -103,22 +103,21 @@ def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) 
     impacts = [Impact(0.0, 0)] if contact_at_start else []
     label, free = machine.slip_label, machine.free
     BEGIN, SLIP, MAX_COMPRESSION, END = machine.acts
-    for seg in segments:
-        state, next_state, t, act = seg.state, seg.next_state, seg.t, seg.act
+    # each record unpacked in Segment's field order (a field read by name costs a descriptor call)
+    for t, sample, state, slip, _, act, next_state, next_slip, delta_max, P_max, delta_r, R_res in segments:
         if act & BEGIN:
-            impacts.append(Impact(t, seg.sample))
+            impacts.append(Impact(t, sample))
         if not impacts:  # a flight before the first impact
             continue
         impact = impacts[-1]
         if act & SLIP:
-            impact.stick_slip.append((t, label(state, seg.slip), label(next_state, seg.next_slip)))
+            impact.stick_slip.append((t, label(state, slip), label(next_state, next_slip)))
         if act & MAX_COMPRESSION:
-            impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = (
-                seg.delta_max, seg.P_max, seg.delta_r, seg.R_res)
+            impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = delta_max, P_max, delta_r, R_res
         if state != free and next_state != state:
             impact.switches.append((t, STATES[state], STATES[next_state]))
         if act & END:
-            impact.t_end, impact.i_end = t, seg.sample
+            impact.t_end, impact.i_end = t, sample
     return impacts
 
 
