@@ -127,8 +127,9 @@ static void trig_from_libm(ig_dopri5 *r)
     r->trig_chain = 0;
 }
 
-/* The smaller and larger of two finite numbers: fmin and fmax are calls into libm (their NaN
- * rules keep GCC from inlining them), and the step-size controller takes several per step. */
+/* The smaller and larger of two numbers that are not NaN (infinities are fine): fmin and fmax
+ * are calls into libm (their NaN rules keep GCC from inlining them), and the step-size
+ * controller takes several per step. */
 static inline double smaller(double a, double b)
 {
     return a < b ? a : b;
@@ -217,9 +218,10 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
 }
 
 /* The stages of a step of size h from (t, y); the new state in y1 with its sines and cosines
- * in trig1, the sixth stage's state in y6, and the error norm. The stages take their angles' sines and cosines from the step
- * start's (stage_trig); the end point too while r->trig_chain < TRIG_CHAIN_MAX, else from libm
- * (the chain of shifts from the last libm values is kept short). */
+ * in trig1, the sixth stage's state in y6 (for the stiffness estimate), and the error norm.
+ * The stages take their angles' sines and cosines from the step start's (stage_trig); the
+ * end point too while r->trig_chain < TRIG_CHAIN_MAX, else from libm (the chain of shifts
+ * from the last libm values is kept short). */
 static int attempt(ig_dopri5 *r, double h, double *y1, double *y6, double *trig1, double *err)
 {
     double (*k)[N] = r->k, dy[N], tmp[N], trig[MODEL_NTRIG];
