@@ -117,7 +117,8 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
     import random
 
     from impactgen.errors import SceneError
-    from impactgen.scene import scene_from_dict, scene_with
+    from impactgen.scene import Scene, scene_from_dict, scene_with
+    assert not hasattr(Scene, "__post_init__")  # scene_with makes scenes without Scene.__init__
     rng = random.Random(7)
     values = {
         "initial.u[2]": lambda: rng.uniform(-1, 1), "initial.q_deg[2]": lambda: rng.uniform(-90, 0),
