@@ -73,37 +73,39 @@ ENERGY_FLOOR = 1e-6
 def validity_warnings(scene: Scene, impacts, contact: YieldScale | None = None) -> list[str]:
     """One warning per kind of trouble, naming the impacts it concerns. `contact`: the
     constants the engine ran with (the C model derives them from the same expressions);
-    without them they are computed from the scene (which imports sympy)."""
+    without them they are computed from the scene (which imports sympy). A sweep asks this
+    of every case, mostly of one impact and nothing to say: that path calls nothing."""
+    solver = scene.solver
     # with sustained contact the phase machine rests the tip instead: the phases say so
-    chatter = [] if scene.solver.t_end is not None and scene.solver.sustained_contact else chattering_warning(impacts)
+    chatter = chattering_warning(impacts) if len(impacts) > 1 and not (
+        solver.t_end is not None and solver.sustained_contact) else []
     found: dict[str, list[tuple[int, str]]] = {}
-    resolution = scene.solver.rtol * sum(scene.chain.length)  # the angles carry rtol |q|
+    resolution = solver.rtol * sum(scene.chain.length)  # the angles carry rtol |q|
     for k, impact in enumerate(impacts, start=1):
         if 0 < impact.delta_max < RESOLUTION_MARGIN * resolution:
             found.setdefault("resolution", []).append(
                 (k, f"delta_max = {impact.delta_max:.3g} m is within {RESOLUTION_MARGIN:g} times the tip "
                     f"position's resolution rtol * sum(L) = {resolution:.1g} m: the energy budget closes "
                     "only to about (resolution / delta_max)^2 of T0; tighten solver.rtol"))
-    if scene.contact.model != "three-phase" or not impacts:
-        return _grouped(found, len(impacts)) + chatter
-    c = contact if contact is not None else contact_constants(scene)
-    for k, impact in enumerate(impacts, start=1):
-        w = impact.delta_max / c.delta_c
-        if impact.delta_max >= YIELD_ONSET * c.delta_c:
-            a = contact_radius(impact.delta_max, c)
-            if a >= c.R:
-                found.setdefault("radius", []).append(
-                    (k, f"contact radius a = {a:.3g} m reaches the tip radius {c.R:.3g} m; "
-                        "Hertz and Jackson-Green assume a << R"))
-        if w > JACKSON_GREEN_MAX_W:
-            found.setdefault("range", []).append(
-                (k, f"delta_max = {w:.3g} delta_c, beyond the {JACKSON_GREEN_MAX_W:g} delta_c "
-                    "that the Jackson-Green fits cover"))
-        if 0 < w < 1:
-            found.setdefault("elastic", []).append(
-                (k, f"the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
-                    "a purely Hertzian impact, delta_r = 0"))
-    return _grouped(found, len(impacts)) + chatter
+    if impacts and scene.contact.model == "three-phase":
+        c = contact if contact is not None else contact_constants(scene)
+        for k, impact in enumerate(impacts, start=1):
+            w = impact.delta_max / c.delta_c
+            if impact.delta_max >= YIELD_ONSET * c.delta_c:
+                a = contact_radius(impact.delta_max, c)
+                if a >= c.R:
+                    found.setdefault("radius", []).append(
+                        (k, f"contact radius a = {a:.3g} m reaches the tip radius {c.R:.3g} m; "
+                            "Hertz and Jackson-Green assume a << R"))
+            if w > JACKSON_GREEN_MAX_W:
+                found.setdefault("range", []).append(
+                    (k, f"delta_max = {w:.3g} delta_c, beyond the {JACKSON_GREEN_MAX_W:g} delta_c "
+                        "that the Jackson-Green fits cover"))
+            if 0 < w < 1:
+                found.setdefault("elastic", []).append(
+                    (k, f"the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
+                        "a purely Hertzian impact, delta_r = 0"))
+    return _grouped(found, len(impacts)) + chatter if found else chatter
 
 
 def _grouped(found: dict[str, list[tuple[int, str]]], n_impacts: int) -> list[str]:
