@@ -163,10 +163,16 @@ class TallyRecords:
     records, each made a `Tallied` when first indexed: a sweep reads one of them, a
     summary one. Pickled as the tuple of both."""
 
-    __slots__ = ("_record", "_raw", "_made")
+    __slots__ = ("_record", "_raw", "_made", "dtype")
 
-    def __init__(self, record, raw: bytes):
+    def __init__(self, record, raw: bytes, dtype: np.dtype):
         self._record, self._raw, self._made = record, raw, [None, None]  # record: a struct.Struct of one
+        self.dtype = dtype  # the same record as a numpy structured dtype
+
+    def raw(self, k: int) -> bytes:
+        """Summary k as the bytes of its C record (`dtype`)."""
+        size = self._record.size
+        return self._raw[k * size:(k + 1) * size]
 
     def __getitem__(self, k: int) -> Tallied:
         made = self._made[k]
@@ -316,6 +322,15 @@ class SimulationResult:
         if self.tallied is None:
             return None
         return self.tallied[1 if self._to_separation() else 0]
+
+    @property
+    def summary_record(self) -> tuple[bytes, np.dtype] | None:
+        """`summary_tallied` as the bytes of its C record and their numpy dtype (None from the
+        reference engine, and from a result that was pickled): a sweep joins a chunk's
+        records into one array, with no Python value per field."""
+        if not isinstance(self.tallied, TallyRecords):
+            return None
+        return self.tallied.raw(1 if self._to_separation() else 0), self.tallied.dtype
 
     def _to_separation(self) -> bool:
         return self.scene.solver.t_end is None and self.status != "failed"

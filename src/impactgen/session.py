@@ -58,20 +58,39 @@ class Segment(NamedTuple):
     R_res: float
 
 
-def record_layout(ffi, ctype: str, skip: tuple[str, ...] = ()) -> str:
-    """The struct-module format of a C struct of doubles, integers and arrays of them (its
-    `skip` fields passed over as pad bytes), laid out as the compiler laid it out: Python
-    values of a whole record in one call, cheaper than a numpy record's."""
-    codes = {("double", 8): "d", ("int", 4): "i", ("long", 8): "q", ("long", 4): "i"}
-    layout, at = "", 0
+_CODES = {("double", 8): "d", ("int", 4): "i", ("long", 8): "q", ("long", 4): "i"}  # C scalar -> struct code
+
+
+def _fields(ffi, ctype: str, skip: tuple[str, ...] = ()):
+    """(name, struct code, element count or None for a scalar, offset) of each field of a
+    C struct of doubles, integers and arrays of them, but the `skip` fields."""
     for name, f in ffi.typeof(ctype).fields:
         if name in skip:
             continue
         item = f.type.item if f.type.kind == "array" else f.type
-        count = f.type.length if f.type.kind == "array" else 1
-        layout += "x" * (f.offset - at) + codes[item.cname, ffi.sizeof(item)] * count
-        at = f.offset + ffi.sizeof(f.type)
+        yield name, _CODES[item.cname, ffi.sizeof(item)], f.type.length if f.type.kind == "array" else None, f.offset
+
+
+def record_layout(ffi, ctype: str, skip: tuple[str, ...] = ()) -> str:
+    """The struct-module format of a C struct of doubles, integers and arrays of them (its
+    `skip` fields passed over as pad bytes), laid out as the compiler laid it out: Python
+    values of a whole record in one call, cheaper than a numpy record's."""
+    layout, at = "", 0
+    for name, code, count, offset in _fields(ffi, ctype, skip):
+        layout += "x" * (offset - at) + code * (count or 1)
+        at = offset + struct.calcsize(code) * (count or 1)
     return layout + "x" * (ffi.sizeof(ctype) - at)
+
+
+def record_dtype(ffi, ctype: str) -> np.dtype:
+    """The same struct as a numpy structured dtype: many records' bytes joined are one array
+    (a sweep's chunk of summaries), with no Python value per field."""
+    names, formats, offsets = [], [], []
+    for name, code, count, offset in _fields(ffi, ctype):
+        names.append(name)
+        formats.append((code, (count,)) if count is not None else code)
+        offsets.append(offset)
+    return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": ffi.sizeof(ctype)})
 
 
 def summary_record(ffi) -> struct.Struct:
@@ -158,6 +177,7 @@ class CvodeSession:
         self._summary_args = (self.tally, self.summaries, self.summaries + 1)
         self._summary_bytes = ffi.buffer(self.summaries)
         self._summary_record = summary_record(ffi)
+        self._summary_dtype = record_dtype(ffi, "ig_summary")
         self._alloc()
 
     def _new_solver(self, scene: Scene):
@@ -250,7 +270,7 @@ class CvodeSession:
         """The run's two summaries, tallied in C now (the session's buffers serve the next
         run), read into Python when asked for."""
         self.model.lib.ig_summarize(*self._summary_args)
-        return TallyRecords(self._summary_record, self._summary_bytes[:])
+        return TallyRecords(self._summary_record, self._summary_bytes[:], self._summary_dtype)
 
     def without_run(self) -> tuple[np.ndarray, TallyRecords]:
         """The outputs at the start, and the summaries of a run that ends where it begins

@@ -1,10 +1,11 @@
 """Where the chunks of a sweep run: this process, a local process pool, or a Dask cluster.
 
-Every backend yields what the chunk function returns for each chunk as it finishes (or the
-rows of `lost_rows`), so the caller writes them at once. A chunk whose worker dies is run again: the process pool is restarted with the chunks
-it had not returned (at most MAX_CHUNK_TRIES times each), and Dask reschedules the tasks of a
-lost worker itself (its `distributed.scheduler.allowed-failures`). A chunk that keeps killing
-its workers ends as rows with status "failed", so no case is ever missing from the table.
+Every backend yields what the chunk function returns for each chunk as it finishes, so the
+caller writes it at once. A chunk whose worker dies is run again: the process pool is restarted
+with the chunks it had not returned (at most MAX_CHUNK_TRIES times each), and Dask reschedules
+the tasks of a lost worker itself (its `distributed.scheduler.allowed-failures`). A chunk that
+keeps killing its workers is yielded as a `Lost` record, which the caller makes rows with
+status "failed", so no case is ever missing from the table.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterator, NamedTuple
 
 from ..errors import SceneError
 
@@ -67,10 +68,12 @@ def chunked(cases: Chunk, workers: int, largest: int = MAX_CHUNK) -> list[Chunk]
     return chunks
 
 
-def lost_rows(chunk: Chunk, reason: str) -> list[dict[str, Any]]:
-    """Rows for the cases of a chunk that could not be run: nothing is silently missing."""
-    return [{"case": i, **overrides, "status": "failed", "message": reason, "warnings": "", "wall_s": 0.0}
-            for i, overrides in chunk]
+class Lost(NamedTuple):
+    """A chunk that could not be run, and why: the caller makes its rows (status "failed"),
+    so that no case is silently missing."""
+
+    chunk: Chunk
+    reason: str
 
 
 def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk) -> Iterator[Any]:
@@ -118,7 +121,7 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
                   "again on a new pool", file=sys.stderr)
         for chunk, tries in retry:
             if tries >= MAX_CHUNK_TRIES:
-                yield lost_rows(chunk, f"its worker process died {tries} times (out of memory, or killed)")
+                yield Lost(chunk, f"its worker process died {tries} times (out of memory, or killed)")
             else:
                 queue.append((chunk, tries))
 
@@ -182,7 +185,7 @@ def dask_cluster(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
                 try:
                     yield future.result()
                 except KilledWorker:
-                    yield lost_rows(futures[future], "the Dask workers running it died repeatedly")
+                    yield Lost(futures[future], "the Dask workers running it died repeatedly")
         finally:
             client.cancel(list(futures))
     finally:

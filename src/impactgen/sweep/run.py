@@ -8,6 +8,7 @@ command resumes, computing only the missing cases. Two sweeps into one folder ar
 from __future__ import annotations
 
 import fcntl
+import itertools
 import json
 import os
 import time
@@ -20,13 +21,11 @@ import numpy as np
 from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
-from ..results import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, Tallied
+from ..results import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
 from . import execute
 from .spec import SweepSpec
 
-TRAJECTORY = "_trajectory"  # a row's key for the columns of a kept trajectory (not a column)
-SUMMARY = "_summary"  # a row's key for its tallied summary and link count (made columns per chunk)
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
 RESULT_FILE = "sweep.parquet"
 
@@ -40,63 +39,79 @@ class CaseOptions:
     keep_trajectories: frozenset[int] = frozenset()  # case indices whose samples are kept
 
 
-def case_row(base: Scene, index: int, overrides: dict[str, Any], keep_trajectory: bool = False) -> dict[str, Any]:
-    """One case of the scene `base`: its varied inputs, its summary as the engine tallied it
-    (made columns for a whole chunk at once, `summary_columns`), status, message, warnings,
-    time."""
+def run_case(out: "ChunkColumns", base: Scene, index: int, overrides: dict[str, Any],
+             keep_trajectory: bool = False) -> None:
+    """One case of the scene `base`, added to the chunk's columns `out`: its summary as the
+    engine tallied it (made columns for the whole chunk at once, `summary_columns`), status,
+    message, warnings, time."""
     started = time.perf_counter()
-    row: dict[str, Any] = {"case": index, **overrides}
     try:
         scene = scene_with(base, overrides)
     except SceneError as exc:
-        row.update(status=STATUS_INVALID, message=str(exc), warnings="",
-                   wall_s=time.perf_counter() - started)
-        return row
+        out.add(None, STATUS_INVALID, str(exc), "", time.perf_counter() - started)
+        return
     try:
         result = simulate(scene, record_steps=keep_trajectory)  # the summaries need no steps
     except ImpactgenError as exc:  # a build failure: the row says so, the sweep goes on
-        row.update(status="failed", message=str(exc), warnings="", wall_s=time.perf_counter() - started)
-        return row
-    row[SUMMARY] = (result.summary_tallied, scene.n)
-    row.update(status=result.status, message=result.message, warnings=" | ".join(result.warnings))
+        out.add(None, "failed", str(exc), "", time.perf_counter() - started)
+        return
     if keep_trajectory:
-        row[TRAJECTORY] = trajectory_columns(result)  # with units
+        out.trajectories[index] = trajectory_columns(result)  # with units
+    record, status, message = result.summary_record, result.status, result.message
+    summary = (record, scene.n) if record is not None else None
+    warnings = " | ".join(result.warnings)
     del result  # freed within the case's time (about 4 us), as the engine's own loop frees it
-    row["wall_s"] = time.perf_counter() - started
-    return row
+    out.add(summary, status, message, warnings, time.perf_counter() - started)
 
 
 SCALARS = (*SUMMARY_LEADING, "n_switches", "n_stick_slip")  # the summary's leading scalars, its lists counted
 
 
-def summary_columns(tallied: list[tuple[Tallied, int] | None]) -> dict[str, np.ndarray]:
+Record = tuple[bytes, np.dtype]  # a summary's C record and its dtype (SimulationResult.summary_record)
+
+
+def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.ndarray]:
     """The summaries of a chunk's cases (with their link counts) as the table's columns, as
     `SimulationResult.summary` names its fields: the lists counted (n_switches, ...) or spread
-    (u_final[1], ...), the energy budget as energy.W_normal, ... A case without a summary
-    (refused, or not built), or with fewer links than another, has NaN there."""
-    cases = [k for k, t in enumerate(tallied) if t is not None]
+    (u_final[1], ...), the energy budget as energy.W_normal, ... The records of one model are
+    joined into one structured array (a Python value per field would cost about 3 us a case).
+    A case without a summary (refused, or not built), or with fewer links than another, has
+    NaN there."""
+    first = records[0] if records else None
+    if first is not None and all(r is not None and r[0][1] is first[0][1] for r in records):
+        # the common chunk: one model (one session's dtype) for every case, its columns as they are
+        return _record_columns(np.frombuffer(b"".join(r[0][0] for r in records), first[0][1]), first[1])
+    cases = [k for k, r in enumerate(records) if r is not None]
     if not cases:
         return {}
-    fields = dict(zip(Tallied._fields, zip(*(tallied[k][0] for k in cases))))
-    links = [tallied[k][1] for k in cases]
-    n = max(links)
-    if min(links) == n and len({len(v) for v in fields["y_final"]}) == 1:  # one model's states for all
-        y = np.array(fields["y_final"])[:, :2 * n]  # (a row at a time would cost 2 us a case)
-    else:
-        y = np.full((len(cases), 2 * n), np.nan)
-        for row, (values, links_here) in enumerate(zip(fields["y_final"], links)):
-            y[row, :links_here], y[row, n:n + links_here] = values[:links_here], values[links_here:2 * links_here]
-    columns = {name: np.array(fields[name]) for name in SCALARS}
-    columns.update({f"u_final[{i + 1}]": y[:, n + i] for i in range(n)})
-    columns.update({f"q_final[{i + 1}]": y[:, i] for i in range(n)})
-    columns.update({name: np.array(fields[name]) for name in SUMMARY_LATER})
-    columns.update({f"energy.{name}": np.array(fields[name]) for name in ENERGY_TERMS})
-    if len(cases) < len(tallied):  # the others' rows get NaN
-        for name, values in columns.items():
-            full = np.full(len(tallied), np.nan)
-            full[cases] = values
-            columns[name] = full
+    models: dict[np.dtype, list[int]] = {}  # the cases of each record layout (one per model)
+    for k in cases:
+        models.setdefault(records[k][0][1], []).append(k)
+    n = max(records[k][1] for k in cases)
+    names = [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
+             *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS)]
+    columns = {name: np.full(len(records), np.nan) for name in names}
+    for dtype, rows in models.items():
+        part = _record_columns(np.frombuffer(b"".join(records[k][0][0] for k in rows), dtype), records[rows[0]][1])
+        for name, values in part.items():
+            columns[name][rows] = values
     return columns
+
+
+def _record_columns(table: np.ndarray, n: int) -> dict[str, np.ndarray]:
+    """The columns of a structured array of summary records of an n-link model (contiguous,
+    integers as int64 as Python's ints make them)."""
+    y = table["y_final"]
+    columns = {name: _column(table[name]) for name in SCALARS}
+    columns.update({f"u_final[{i + 1}]": y[:, n + i].copy() for i in range(n)})
+    columns.update({f"q_final[{i + 1}]": y[:, i].copy() for i in range(n)})
+    columns.update({name: _column(table[name]) for name in SUMMARY_LATER})
+    columns.update({f"energy.{name}": _column(table[name]) for name in ENERGY_TERMS})
+    return columns
+
+
+def _column(field: np.ndarray) -> np.ndarray:
+    return field.astype(np.int64) if field.dtype.kind == "i" else field.copy()
 
 
 @dataclass
@@ -109,30 +124,66 @@ class ChunkRows:
     columns: dict[str, np.ndarray | list[Any]]
     trajectories: dict[int, dict[str, tuple[np.ndarray, str]]]
 
-    @classmethod
-    def from_rows(cls, rows: list[dict[str, Any]]) -> "ChunkRows":
-        kept = {row["case"]: row.pop(TRAJECTORY) for row in rows if TRAJECTORY in row}
-        summaries = summary_columns([row.pop(SUMMARY, None) for row in rows])
-        names: dict[str, Any] = {}  # every column, in first-seen order
-        for row in rows:
-            names.update(row)
-        columns = {name: _packed([row.get(name) for row in rows]) for name in names}  # None: no value
-        return cls({**columns, **summaries}, kept)
-
     def __len__(self) -> int:
         return len(self.columns.get("case", ()))
 
     @staticmethod
     def joined(parts: list["ChunkRows"]) -> dict[str, np.ndarray | list[Any]]:
-        """The columns of `parts` end to end (None where a part lacks a column)."""
+        """The columns of `parts` end to end, the parts in the order of their first case (a
+        sweep's chunks are mostly runs of consecutive cases, which are then in order already;
+        None where a part lacks a column)."""
+        parts = sorted(parts, key=lambda part: part.columns["case"][0] if len(part) else -1)
         out: dict[str, np.ndarray | list[Any]] = {}
         for name in dict.fromkeys(name for part in parts for name in part.columns):
             pieces = [part.columns.get(name) for part in parts]
             if all(isinstance(p, np.ndarray) for p in pieces) and len({p.dtype for p in pieces}) == 1:
                 out[name] = np.concatenate(pieces)
             else:
-                out[name] = [v for part, p in zip(parts, pieces) for v in _as_list(p, len(part))]
+                out[name] = list(itertools.chain.from_iterable(_as_list(p, len(part)) for part, p in zip(parts, pieces)))
         return out
+
+
+class ChunkColumns:
+    """A chunk's rows as its cases finish, a list per column (`rows` makes them `ChunkRows`).
+    Not a dict per row: every row lives until the chunk is sent, and 500 dicts that the
+    garbage collector tracks cost the worker about 2.5 us a case in its passes."""
+
+    def __init__(self, cases: execute.Chunk):
+        self.cases = cases
+        self.summaries: list[tuple[Record, int] | None] = []  # with the case's link count
+        self.status: list[str] = []
+        self.message: list[str] = []
+        self.warnings: list[str] = []
+        self.wall_s: list[float] = []
+        self.trajectories: dict[int, dict[str, tuple[np.ndarray, str]]] = {}
+
+    def add(self, summary: tuple[Record, int] | None, status: str, message: str, warnings: str,
+            wall_s: float) -> None:
+        """The next case's row (the cases' order)."""
+        self.summaries.append(summary)
+        self.status.append(status)
+        self.message.append(message)
+        self.warnings.append(warnings)
+        self.wall_s.append(wall_s)
+
+    def rows(self) -> ChunkRows:
+        """case, the varied keys (None where a case lacks one), status, message, warnings,
+        wall_s, then the summaries' columns."""
+        keys = dict.fromkeys(key for _, overrides in self.cases for key in overrides)
+        columns = {"case": _packed([index for index, _ in self.cases])}
+        columns.update({key: _packed([overrides.get(key) for _, overrides in self.cases]) for key in keys})
+        columns.update(status=self.status, message=self.message, warnings=self.warnings,
+                       wall_s=np.array(self.wall_s, dtype=float))
+        return ChunkRows({**columns, **summary_columns(self.summaries)}, self.trajectories)
+
+
+def lost_rows(lost: execute.Lost) -> ChunkRows:
+    """Rows with status "failed" for the cases of a chunk that could not be run: nothing is
+    silently missing."""
+    out = ChunkColumns(lost.chunk)
+    for _ in lost.chunk:
+        out.add(None, "failed", lost.reason, "", 0.0)
+    return out.rows()
 
 
 def _as_list(column: np.ndarray | list[Any] | None, rows: int) -> list[Any]:
@@ -156,8 +207,10 @@ def _packed(values: list[Any]) -> np.ndarray | list[Any]:
 def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> ChunkRows:
     """The rows of some cases of one scene (what a worker process or Dask task runs)."""
     base = scene_from_dict(scene_dict)
-    return ChunkRows.from_rows([case_row(base, index, overrides, index in options.keep_trajectories)
-                                for index, overrides in cases])
+    out = ChunkColumns(cases)
+    for index, overrides in cases:
+        run_case(out, base, index, overrides, index in options.keep_trajectories)
+    return out.rows()
 
 
 def evenly_chosen(count: int, total: int) -> frozenset[int]:
@@ -274,7 +327,7 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
         todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in finished]
         parts: list[ChunkRows] = []  # every new row, made a DataFrame once at the end
         for done in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
-            chunk = done if isinstance(done, ChunkRows) else ChunkRows.from_rows(done)  # lost rows come as rows
+            chunk = done if isinstance(done, ChunkRows) else lost_rows(done)
             if folder:
                 for case, kept in chunk.trajectories.items():
                     folder.write_trajectory(case, kept)
@@ -302,8 +355,11 @@ def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec
     time of pandas' own drop_duplicates, sort and selection."""
     import pandas as pd
     if columns is not None and not frames:
-        order = np.argsort(columns["case"], kind="stable")
-        if not (np.diff(np.asarray(columns["case"])[order]) == 0).any():
+        case = np.asarray(columns["case"])
+        if (np.diff(case) > 0).all():  # in order already, each case once (the parts joined in order)
+            return pd.DataFrame({name: columns[name] for name in _column_order(columns, spec)})
+        order = np.argsort(case, kind="stable")
+        if not (np.diff(case[order]) == 0).any():
             return pd.DataFrame({name: _taken(columns[name], order) for name in _column_order(columns, spec)})
     if columns is not None:
         frames = [*frames, pd.DataFrame(columns)]
@@ -341,7 +397,7 @@ def _kept_cases(trajectories: int | Iterable[int], total: int) -> frozenset[int]
 
 
 def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: int | None,
-             scheduler: str | None) -> Iterable[ChunkRows | list[dict[str, Any]]]:
+             scheduler: str | None) -> Iterable[ChunkRows | execute.Lost]:
     if not todo:
         return iter(())
     payload = scene.to_dict()
