@@ -393,3 +393,47 @@ def test_pool_workers_end_on_sigterm_whatever_the_driver_does_with_it():
     finally:
         signal.signal(signal.SIGTERM, saved)
     assert len(rows) == 4 and all(r["sigterm_default"] for r in rows)
+
+
+
+
+# a chunk function that kills its worker process whenever its chunk holds case 3, in a module
+# of its own: a pool started after a broken one forks from a server (the broken pool's threads
+# live on), and its workers import the function by name
+_CRASHING_MODULE = """
+import os
+from impactgen.sweep import run
+original = run.run_chunk
+def crashing(payload, cases, options):
+    if any(index == 3 for index, _ in cases):
+        os._exit(1)
+    return original(payload, cases, options)
+"""
+_CRASHING_SWEEP = """
+import json
+import crashing_chunks, impactgen
+from impactgen.sweep import run
+run.run_chunk = crashing_chunks.crashing
+table = impactgen.sweep("paper", vary={"initial.u[2]": "linspace(-0.5,-0.1,64)"}, workers=2)
+failed = table[table["status"] == "failed"]
+print(json.dumps({"cases": len(table), "failed": sorted(failed["case"].tolist()),
+                  "messages": sorted(set(failed["message"])), "statuses": sorted(set(table["status"]))}))
+"""
+
+
+@pytest.mark.slow
+def test_a_chunk_that_kills_its_worker_fails_alone(tmp_path):
+    """A chunk whose worker dies every time ends as failed rows after MAX_CHUNK_TRIES; the
+    chunks that were in the pool beside it when it broke are run again and finish."""
+    from impactgen.sweep.execute import MAX_CHUNK_TRIES, chunked
+    (tmp_path / "crashing_chunks.py").write_text(_CRASHING_MODULE)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))}
+    res = subprocess.run([sys.executable, "-c", _CRASHING_SWEEP], capture_output=True, text=True, timeout=300,
+                         env=env)
+    assert res.returncode == 0, res.stderr
+    got = json.loads(res.stdout.strip().splitlines()[-1])
+    first = [index for index, _ in chunked(list(enumerate(range(64))), 2)[0]]  # the chunk holding case 3
+    assert 3 in first and len(first) < 64
+    assert got["cases"] == 64 and got["failed"] == first and got["statuses"] == ["failed", "ok"]
+    assert got["messages"] == [f"its worker process died {MAX_CHUNK_TRIES} times (out of memory, or killed)"]
+    assert res.stderr.count("a worker process died") == MAX_CHUNK_TRIES

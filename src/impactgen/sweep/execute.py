@@ -14,10 +14,11 @@ import multiprocessing
 import signal
 import sys
 import threading
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
-from typing import Any, Callable, Iterator, NamedTuple
+from typing import Any, Callable, Iterable, Iterator, NamedTuple
 
 from ..errors import SceneError
 
@@ -29,6 +30,8 @@ IN_PROCESS_SHARES = 4  # in this process, chunks as a pool of four has them: the
 MAX_TASK_CHUNK = 1000  # cases per Dask task: a task costs the cluster about 5 ms (500 tasks of 200
 # cases doing nothing took 2.6 s on a LocalCluster of two workers), a pool's chunk about 0.8 ms
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
+AHEAD_PER_WORKER = 2  # chunks sent to a pool per worker at a time: the next is always waiting,
+# and a dead worker leaves only these as suspects (the pool itself holds workers + 1)
 ABANDON_JOIN_S = 5.0  # s to wait for each killed worker of a broken pool
 
 Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)
@@ -83,47 +86,57 @@ def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo:
 
 def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
                  workers: int) -> Iterator[Any]:
-    """A local pool of `workers` processes; a pool broken by a dead worker is started again
-    with the chunks it had not returned."""
-    queue = [(chunk, 0) for chunk in chunked(todo, workers)]
+    """A local pool of `workers` processes, sent AHEAD_PER_WORKER chunks per worker ahead.
+    A dead worker breaks the pool, and the chunks sent to it then are suspects: they run
+    again on a new pool one at a time, so that a chunk that kills its worker is told apart
+    from the chunks sent with it, and it alone is tried up to MAX_CHUNK_TRIES times."""
+    queue = deque((chunk, 0) for chunk in chunked(todo, workers))  # (chunk, the pools it broke with)
     while queue:
-        retry: list[tuple[Chunk, int]] = []
         pool = ProcessPoolExecutor(max_workers=workers, mp_context=_start_method(), initializer=_worker_signals)
-        finished_normally = False
-        pending: dict = {}
-        sent = 0
+        pending: dict[Future, tuple[Chunk, int]] = {}
+        broken = finished_normally = False
         try:
-            for chunk, tries in queue:
-                pending[pool.submit(run_chunk, payload, chunk, options)] = (chunk, tries)
-                sent += 1
-            for future in as_completed(list(pending)):  # one waiter for all (wait() installs one per call)
-                chunk, tries = pending.pop(future)
-                try:
-                    rows = future.result()
-                except BrokenProcessPool:
-                    retry.append((chunk, tries + 1))
-                    continue
-                yield rows
+            while (queue or pending) and not broken:
+                while queue and _may_send(queue[0][1], pending.values(), AHEAD_PER_WORKER * workers):
+                    chunk, tries = queue.popleft()
+                    pending[pool.submit(run_chunk, payload, chunk, options)] = (chunk, tries)
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    try:
+                        rows = future.result()
+                    except BrokenProcessPool:
+                        broken = True
+                        continue
+                    pending.pop(future)
+                    yield rows
             finished_normally = True
-        except BrokenProcessPool:  # submit, before any result was taken: a worker died already
-            retry += [(chunk, tries + 1) for chunk, tries in pending.values()] + queue[sent:]
-            finished_normally = True
+        except BrokenProcessPool:  # from submit: a worker had died already
+            broken = finished_normally = True
         finally:
             for future in list(pending):
                 future.cancel()
-            if retry:  # broken: never wait on it (its queue feeder can block on a dead worker's pipe)
+            if broken:  # never wait on it (its queue feeder can block on a dead worker's pipe)
                 _abandon(pool)
             else:  # interrupted (Ctrl-C, SIGTERM): return at once, the workers end after their chunk
                 pool.shutdown(wait=finished_normally, cancel_futures=True)
-        queue = []
-        if retry:
-            print(f"impactgen: a worker process died; running its {len(retry)} unfinished chunks "
-                  "again on a new pool", file=sys.stderr)
-        for chunk, tries in retry:
+        if not broken:
+            break
+        suspects = [(chunk, tries + 1) for chunk, tries in pending.values()]
+        print(f"impactgen: a worker process died; running the {len(suspects)} chunks the pool had "
+              "been sent again on a new pool, one at a time", file=sys.stderr)
+        for chunk, tries in suspects:
             if tries >= MAX_CHUNK_TRIES:
                 yield Lost(chunk, f"its worker process died {tries} times (out of memory, or killed)")
-            else:
-                queue.append((chunk, tries))
+        queue.extendleft(reversed([(chunk, tries) for chunk, tries in suspects if tries < MAX_CHUNK_TRIES]))
+
+
+def _may_send(tries: int, pending: Iterable[tuple[Chunk, int]], ahead: int) -> bool:
+    """Whether the next chunk (in `tries` broken pools so far) may go to the pool now: a
+    suspect goes alone, and nothing goes beside one; others up to `ahead` at a time."""
+    pending = list(pending)
+    if any(t for _, t in pending):
+        return False
+    return not pending if tries else len(pending) < ahead
 
 
 def _worker_signals() -> None:
