@@ -158,26 +158,43 @@ class Tallied(NamedTuple):
 _Y_FINAL = len(Tallied._fields) - 1  # y_final, the last field, is the rest of a record's values
 
 
+class SummaryLayout(NamedTuple):
+    """How the C engine's ig_summary record reads, made once per session from its cffi layout."""
+
+    record: Any  # struct.Struct: every field as a Python value, in Tallied's order
+    dtype: np.dtype  # the same record as a numpy structured dtype
+    budget: Any  # struct.Struct: the BUDGET fields alone, in their order
+
+
 class TallyRecords:
     """The C engine's two summaries (the run's, its first impact's) as the bytes of their C
     records, each made a `Tallied` when first indexed: a sweep reads one of them, a
     summary one. Pickled as the tuple of both."""
 
-    __slots__ = ("_record", "_raw", "_made", "dtype")
+    __slots__ = ("_layout", "_raw", "_made")
 
-    def __init__(self, record, raw: bytes, dtype: np.dtype):
-        self._record, self._raw, self._made = record, raw, [None, None]  # record: a struct.Struct of one
-        self.dtype = dtype  # the same record as a numpy structured dtype
+    def __init__(self, layout: SummaryLayout, raw: bytes):
+        self._layout, self._raw, self._made = layout, raw, [None, None]
+
+    @property
+    def dtype(self) -> np.dtype:
+        return self._layout.dtype
 
     def raw(self, k: int) -> bytes:
         """Summary k as the bytes of its C record (`dtype`)."""
-        size = self._record.size
+        size = self._layout.record.size
         return self._raw[k * size:(k + 1) * size]
+
+    def budget(self, k: int) -> tuple[float, ...]:
+        """The BUDGET fields of summary k (without making its `Tallied`: a sweep's warnings
+        read nothing else of it)."""
+        return self._layout.budget.unpack_from(self._raw, k * self._layout.record.size)
 
     def __getitem__(self, k: int) -> Tallied:
         made = self._made[k]
         if made is None:
-            values = self._record.unpack_from(self._raw, k * self._record.size)
+            record = self._layout.record
+            values = record.unpack_from(self._raw, k * record.size)
             made = self._made[k] = tuple.__new__(Tallied, (*values[:_Y_FINAL], values[_Y_FINAL:]))
         return made
 
@@ -416,9 +433,10 @@ class SimulationResult:
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity, and an energy budget that
         does not close (see validity.py)."""
-        s = self.summary_tallied
-        if s is not None:  # the C engine's summary, without building its dict
-            budget = (s.T0, s.Tf, s.W_normal, s.W_friction, s.W_gravity, s.residual)
+        if isinstance(self.tallied, TallyRecords):  # the C engine's summary, as its record has it
+            budget = self.tallied.budget(1 if self._to_separation() else 0)
+        elif self.tallied is not None:  # the same, unpickled
+            budget = tuple(getattr(self.summary_tallied, name) for name in BUDGET)
         else:
             summary = self.summary
             budget = (summary["T0"], summary["Tf"], *(summary["energy"][k] for k in ENERGY_TERMS))
@@ -531,6 +549,7 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
 SUMMARY_LEADING = Tallied._fields[:9]  # T0 .. t_impact: the summary's first entries, in its order
 SUMMARY_LATER = ("impacts", "t_sustained", "t_final")  # its entries after the final state
 ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy budget, as energy_balance
+BUDGET = ("T0", "Tf", *ENERGY_TERMS)  # what energy_warning reads of a summary, in its order
 
 
 def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:

@@ -16,7 +16,7 @@ import numpy as np
 
 from .build import CompiledModel
 from .errors import SolverError
-from .results import Tallied, TallyRecords
+from .results import BUDGET, SummaryLayout, Tallied, TallyRecords
 from .scene import EXPLICIT_METHODS, METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
@@ -93,13 +93,18 @@ def record_dtype(ffi, ctype: str) -> np.dtype:
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": ffi.sizeof(ctype)})
 
 
-def summary_record(ffi) -> struct.Struct:
-    """An ig_summary record read as Python values in Tallied's order (which mirrors the C
-    struct's, y_final last: checked here, once per session)."""
+def summary_layout(ffi) -> SummaryLayout:
+    """How an ig_summary record reads: as Python values in Tallied's order (which mirrors the
+    C struct's, y_final last: checked here, once per session), as a numpy dtype, and its
+    energy budget alone."""
     fields = ffi.typeof("ig_summary").fields
     if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
         raise AssertionError(f"results.Tallied does not mirror cvode_glue.h's ig_summary: {fields}")
-    return struct.Struct("=" + record_layout(ffi, "ig_summary"))
+    others = tuple(name for name in Tallied._fields if name not in BUDGET)
+    if [name for name in Tallied._fields if name in BUDGET] != list(BUDGET):
+        raise AssertionError(f"results.BUDGET is not in ig_summary's order: {BUDGET}")
+    return SummaryLayout(struct.Struct("=" + record_layout(ffi, "ig_summary")), record_dtype(ffi, "ig_summary"),
+                         struct.Struct("=" + record_layout(ffi, "ig_summary", others)))
 
 
 _make_segment = partial(tuple.__new__, Segment)  # Segment._make without its Python frame (rows have its fields)
@@ -176,8 +181,7 @@ class CvodeSession:
         self.summaries = ffi.new("ig_summary[2]")  # the run's, its first impact's
         self._summary_args = (self.tally, self.summaries, self.summaries + 1)
         self._summary_bytes = ffi.buffer(self.summaries)
-        self._summary_record = summary_record(ffi)
-        self._summary_dtype = record_dtype(ffi, "ig_summary")
+        self._summary_layout = summary_layout(ffi)
         self._alloc()
 
     def _new_solver(self, scene: Scene):
@@ -270,7 +274,7 @@ class CvodeSession:
         """The run's two summaries, tallied in C now (the session's buffers serve the next
         run), read into Python when asked for."""
         self.model.lib.ig_summarize(*self._summary_args)
-        return TallyRecords(self._summary_record, self._summary_bytes[:], self._summary_dtype)
+        return TallyRecords(self._summary_layout, self._summary_bytes[:])
 
     def without_run(self) -> tuple[np.ndarray, TallyRecords]:
         """The outputs at the start, and the summaries of a run that ends where it begins
