@@ -88,6 +88,18 @@ def test_a_chunk_s_summary_columns_are_the_summaries_of_its_cases():
         assert set(row) <= set(names), set(row) - set(names)
 
 
+def test_a_chunk_of_two_models_keeps_its_counts_integers():
+    """Counts stay integers when every case of a chunk has them, whatever models the cases
+    ran on (a chunk of a sweep over chain.links), as in a chunk of one model."""
+    from impactgen.sweep.run import CaseOptions, run_chunk
+    cases = [{"initial.u[2]": -0.3},
+             {"chain.links": 3, "chain.length": 0.7, "chain.mass": 1.0, "initial.q_deg": [-70, -60, -60],
+              "initial.u": [-0.1, -0.2, -0.2]}]
+    columns = run_chunk(impactgen.load_scene(PAPER).to_dict(), list(enumerate(cases)), CaseOptions()).columns
+    assert all(columns[name].dtype == np.int64 for name in ("n_switches", "n_stick_slip", "impacts"))
+    assert np.isnan(columns["u_final[3]"][0]) and not np.isnan(columns["u_final[3]"][1])
+
+
 def test_a_sweep_freezes_the_callers_heap_only_while_it_runs():
     """The heap is frozen for the collector during a sweep (its workers fork from it) and
     handed back as it was: unfrozen, or frozen by the caller and left so."""

@@ -168,8 +168,9 @@ class SummaryLayout(NamedTuple):
 
 class TallyRecords:
     """The C engine's two summaries (the run's, its first impact's) as the bytes of their C
-    records, each made a `Tallied` when first indexed: a sweep reads one of them, a
-    summary one. Pickled as the tuple of both."""
+    records, each made a `Tallied` when first indexed (a summary reads one of them; a sweep
+    reads one's bytes and its energy budget, and makes no `Tallied`). Pickled as the tuple
+    of both."""
 
     __slots__ = ("_layout", "_raw", "_made")
 
