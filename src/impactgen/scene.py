@@ -572,8 +572,8 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
             else:
                 target[index - 1] = convert(checked)
         elif section in _SECTION_FIELDS and (section not in ("rod", "surface") or key in _MATERIALS):
-            field = _SECTION_FIELDS[section]  # a Material, Contact, Solver or the chain's gravity
-            fields[field] = dataclasses.replace(fields.get(field, getattr(base, field)), **{key: checked})
+            # the field of the section's name: a Material, Contact, Solver or the chain's gravity
+            fields[section] = dataclasses.replace(fields.get(section, getattr(base, section)), **{key: checked})
         elif name == "rod.tip_radius":
             fields["tip_radius"] = checked
         elif name == "surface.height":
@@ -593,7 +593,7 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     return scene
 
 
-_SECTION_FIELDS = {"chain": "chain", "rod": "rod", "surface": "surface", "contact": "contact", "solver": "solver"}
+_SECTION_FIELDS = {"chain", "rod", "surface", "contact", "solver"}  # sections that are a Scene field of their name
 
 
 def _replaced(base: Scene, fields: dict[str, Any]) -> Scene:

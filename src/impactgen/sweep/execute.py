@@ -1,11 +1,11 @@
 """Where the chunks of a sweep run: this process, a local process pool, or a Dask cluster.
 
 Every backend yields what the chunk function returns for each chunk as it finishes, so the
-caller writes it at once. A chunk whose worker dies is run again: the process pool is restarted
-with the chunks it had not returned (at most MAX_CHUNK_TRIES times each), and Dask reschedules
-the tasks of a lost worker itself (its `distributed.scheduler.allowed-failures`). A chunk that
-keeps killing its workers is yielded as a `Lost` record, which the caller makes rows with
-status "failed", so no case is ever missing from the table.
+caller writes it at once. A chunk whose worker dies is run again: the process pool is restarted,
+and the chunks it had been sent run first, one at a time (a chunk at most MAX_CHUNK_TRIES times);
+Dask reschedules the tasks of a lost worker itself (its `distributed.scheduler.allowed-failures`).
+A chunk that keeps killing its workers is yielded as a `Lost` record, which the caller makes
+rows with status "failed", so no case is ever missing from the table.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
-from typing import Any, Callable, Iterable, Iterator, NamedTuple
+from typing import Any, Callable, Collection, Iterator, NamedTuple
 
 from ..errors import SceneError
 
@@ -131,10 +131,9 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
         queue.extendleft(reversed([(chunk, tries) for chunk, tries in suspects if tries < MAX_CHUNK_TRIES]))
 
 
-def _may_send(tries: int, pending: Iterable[tuple[Chunk, int]], ahead: int) -> bool:
+def _may_send(tries: int, pending: Collection[tuple[Chunk, int]], ahead: int) -> bool:
     """Whether the next chunk (in `tries` broken pools so far) may go to the pool now: a
     suspect goes alone, and nothing goes beside one; others up to `ahead` at a time."""
-    pending = list(pending)
     if any(t for _, t in pending):
         return False
     return not pending if tries else len(pending) < ahead

@@ -91,12 +91,13 @@ def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.nd
     names = [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
              *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS)]
     columns = {name: np.full(len(records), np.nan) for name in names}
-    integers = set()
+    integers: set[str] = set()
     for dtype, rows in models.items():
         part = _record_columns(np.frombuffer(b"".join(records[k][0][0] for k in rows), dtype), records[rows[0]][1])
         for name, values in part.items():
             columns[name][rows] = values
-            integers.update([name] if values.dtype.kind == "i" else [])
+            if values.dtype.kind == "i":
+                integers.add(name)
     if len(cases) == len(records):  # every case has the integer fields: integers, as in one model's chunk
         columns.update({name: columns[name].astype(np.int64) for name in integers})
     return columns
