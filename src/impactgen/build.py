@@ -41,7 +41,9 @@ from .sundials import Sundials, find_sundials
 COMPILE_ARGS = ("-O3", "-fno-math-errno")
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
-GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "dopri5.c", "dopri5.h", "small_kernels.c", "small_kernels.h")
+GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "dopri5.c", "dopri5.h", "small_kernels.c", "small_kernels.h",
+              "tally.c", "tally.h")
+CDEF_HEADERS = ("tally.h", "cvode_glue.h")  # the runtime's declarations cffi reads, in this order
 MANIFEST = "manifest.json"
 
 if TYPE_CHECKING:  # the generator (sympy) is imported only to build a model, not to load one
@@ -117,10 +119,12 @@ def build_key(spec: ModelSpec, sundials: Sundials) -> str:
 
 
 def _glue_cdef() -> str:
-    text = _native("cvode_glue.h")
-    match = re.search(r"/\* cdef-begin.*?\*/(.*)/\* cdef-end \*/", text, re.S)
-    assert match, "cvode_glue.h lacks its cdef markers"
-    return match.group(1)
+    blocks = []
+    for name in CDEF_HEADERS:
+        match = re.search(r"/\* cdef-begin.*?\*/(.*)/\* cdef-end \*/", _native(name), re.S)
+        assert match, f"{name} lacks its cdef markers"
+        blocks.append(match.group(1))
+    return "".join(blocks)
 
 
 def _file_digest(path: Path) -> str:

@@ -99,7 +99,7 @@ def summary_layout(ffi) -> SummaryLayout:
     energy budget alone."""
     fields = ffi.typeof("ig_summary").fields
     if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
-        raise AssertionError(f"results.Tallied does not mirror cvode_glue.h's ig_summary: {fields}")
+        raise AssertionError(f"results.Tallied does not mirror tally.h's ig_summary: {fields}")
     others = tuple(name for name in Tallied._fields if name not in BUDGET)
     if [name for name in Tallied._fields if name in BUDGET] != list(BUDGET):
         raise AssertionError(f"results.BUDGET is not in ig_summary's order: {BUDGET}")

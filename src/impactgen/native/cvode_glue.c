@@ -19,6 +19,7 @@
 #include "cvode_glue.h"
 #include "dopri5.h"
 #include "small_kernels.h"
+#include "tally.h"
 
 #ifndef SUNDIALS_VERSION_MAJOR
 #error "SUNDIALS_VERSION_MAJOR is not defined: impactgen needs SUNDIALS 6 or 7"
@@ -578,130 +579,6 @@ static int begin_segment(ig_solver *s, const model_machine *m, const model_param
     return ig_segment_start(s, p, t, y, t_stop, events, directions, watched);
 }
 
-/* The values a summary reads at sample k of the buffers. */
-static void read_point(ig_point *point, double t, const double *y, const double *out)
-{
-    point->t = t;
-    point->T = out[MODEL_OUT_T];
-    point->V = out[MODEL_OUT_V];
-    point->W_normal = y[2 * MODEL_NQ];
-    point->W_friction = MODEL_NSTATE > 2 * MODEL_NQ + 1 ? y[MODEL_NSTATE - 1] : 0.0;
-    memcpy(point->y, y, sizeof point->y);
-}
-
-void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact)
-{
-    memset(tally, 0, sizeof *tally);
-    read_point(&tally->start, t0, y0, out0);
-    tally->last = tally->start;
-    tally->segment_start = t0;
-    tally->t_sustained = NAN;
-    if (in_contact) {
-        tally->impacts = 1;
-        tally->first_begin = tally->start;
-        tally->now_start = t0;
-    }
-}
-
-/* Add the latest impact's record (a->now_...) to the run's: the largest delta_max and P_max,
- * the deepest dent (the first of equals), its contact time. */
-static void fold_impact(ig_tally *a, double contact, int first_folded)
-{
-    if (a->now_delta_max > a->delta_max) a->delta_max = a->now_delta_max;
-    if (a->now_P_max > a->P_max) a->P_max = a->now_P_max;
-    if (first_folded || a->now_delta_r > a->deepest_delta_r) {
-        a->deepest_delta_r = a->now_delta_r;
-        a->deepest_R_res = a->now_R_res;
-    }
-    a->t_contact += contact;
-}
-
-/* Follow one finished segment (its end is sample k of the buffers) in the tally. */
-static void tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
-                          const double *out_buf)
-{
-    const long k = seg->sample;
-    const double *y = y_buf + (size_t)k * MODEL_NSTATE, *out = out_buf + (size_t)k * MODEL_NOUT;
-    if (seg->state == MODEL_MACHINE_SUSTAINED && isnan(a->t_sustained)) a->t_sustained = a->segment_start;
-    a->segment_start = seg->t;
-    if (seg->act & MODEL_ACT_IMPACT_BEGIN) {
-        if (++a->impacts == 1) read_point(&a->first_begin, t_buf[k], y, out);
-        a->now_start = seg->t;
-        a->now_delta_max = a->now_P_max = a->now_delta_r = a->now_R_res = 0.0;
-    }
-    if (a->impacts == 0) return;
-    if (seg->act & MODEL_ACT_MAX_COMPRESSION) {
-        a->now_delta_max = seg->delta_max;
-        a->now_P_max = seg->P_max;
-        a->now_delta_r = seg->delta_r;
-        a->now_R_res = seg->R_res;
-    }
-    if (a->impacts == 1) {
-        if (seg->act & MODEL_ACT_SLIP) a->first_stick_slip++;
-        if (seg->state != MODEL_MACHINE_FREE && seg->next_state != seg->state) a->first_switches++;
-    }
-    if (seg->act & MODEL_ACT_IMPACT_END) {
-        fold_impact(a, seg->t - a->now_start, a->ended++ == 0);
-        if (a->impacts == 1) {
-            read_point(&a->first_end, t_buf[k], y, out);
-            a->first_delta_max = a->now_delta_max;
-            a->first_P_max = a->now_P_max;
-            a->first_delta_r = a->now_delta_r;
-            a->first_R_res = a->now_R_res;
-        }
-    }
-}
-
-/* A summary from sample `from` to sample `to` (the energies, the works, the end state). */
-static void summarize_between(const ig_point *from, const ig_point *to, ig_summary *out)
-{
-    out->T0 = from->T;
-    out->Tf = to->T;
-    out->delta_T = from->T - to->T;
-    memcpy(out->y_final, to->y, sizeof out->y_final);
-    out->t_final = to->t;
-    out->W_normal = to->W_normal - from->W_normal;
-    out->W_friction = to->W_friction - from->W_friction;
-    out->W_gravity = from->V - to->V;
-    out->residual = (to->T - from->T) - (out->W_normal + out->W_friction + out->W_gravity);
-}
-
-void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
-{
-    const int open = a->impacts > a->ended;  /* the latest impact is still in contact */
-    ig_tally all = *a;
-    if (open) fold_impact(&all, a->last.t - a->now_start, a->ended == 0);
-    memset(run, 0, sizeof *run);
-    summarize_between(&a->start, &a->last, run);
-    run->delta_max = all.delta_max;
-    run->P_max = all.P_max;
-    run->delta_r = all.deepest_delta_r;
-    run->R_res = all.deepest_R_res;
-    run->t_contact = all.t_contact;
-    run->t_impact = a->impacts ? a->first_begin.t : NAN;
-    run->n_switches = a->first_switches;
-    run->n_stick_slip = a->first_stick_slip;
-    run->impacts = a->impacts;
-    run->t_sustained = a->t_sustained;
-    if (a->impacts == 0) {
-        *first = *run;
-        return;
-    }
-    memset(first, 0, sizeof *first);
-    const int first_open = a->ended == 0;
-    summarize_between(&a->first_begin, first_open ? &a->last : &a->first_end, first);
-    first->delta_max = first_open ? a->now_delta_max : a->first_delta_max;
-    first->P_max = first_open ? a->now_P_max : a->first_P_max;
-    first->delta_r = first_open ? a->now_delta_r : a->first_delta_r;
-    first->R_res = first_open ? a->now_R_res : a->first_R_res;
-    first->t_contact = first_open ? 0.0 : a->first_end.t - a->first_begin.t;
-    first->t_impact = a->first_begin.t;
-    first->n_switches = a->first_switches;
-    first->n_stick_slip = a->first_stick_slip;
-    first->impacts = a->impacts;
-    first->t_sustained = a->t_sustained;
-}
-
 /* ig_run's loop over the segments (cvode_glue.h); ig_run then notes its last sample in the
  * tally, whichever way the loop returned. */
 static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
@@ -768,7 +645,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         seg->P_max = m->P_max;
         seg->delta_r = m->delta_r;
         seg->R_res = m->R_res;
-        if (tally) tally_segment(tally, seg, t_buf, y_buf, out_buf);
+        if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
         if (flag == IG_REACHED_END) return IG_REACHED_END;
         const int act = seg->act;
         if (act & MODEL_ACT_END) return IG_RUN_DONE;
@@ -803,7 +680,7 @@ int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y
                                  dense_buf, capacity, n_written, segments, segment_capacity, n_segments, tally);
     if (tally && *n_written > 0) {
         const long k = *n_written - 1;
-        read_point(&tally->last, t_buf[k], y_buf + (size_t)k * MODEL_NSTATE, out_buf + (size_t)k * MODEL_NOUT);
+        ig_read_point(&tally->last, t_buf[k], y_buf + (size_t)k * MODEL_NSTATE, out_buf + (size_t)k * MODEL_NOUT);
     }
     return flag;
 }

@@ -13,6 +13,7 @@
 
 #include "model.h"
 #include "model_machine.h"
+#include "tally.h"
 
 /* cdef-begin: the declarations below are read by cffi as they stand. */
 /* Return codes of ig_segment_advance (>= 0: the segment may continue or is done). */
@@ -108,68 +109,6 @@ const char *ig_solver_message(const ig_solver *s);
 /* Evaluate model_outputs for n samples (one Python crossing for a whole segment). */
 void ig_outputs(const model_params *params, int n, const double *t, const double *y,
                 double *out);
-
-/* One phase segment of ig_run: the machine state it ran in, how it ended, what the switch
- * at its end did, and the parameters it ran under (the machine changes some at a switch). */
-typedef struct {
-    double t;            /* its end, s */
-    long sample;         /* index of its last sample in the buffers of the ig_run call */
-    int state;           /* MODEL_MACHINE_* during the segment */
-    double slip;         /* the stick-slip state during it (model_machine.slip) */
-    int event;           /* the model event that ended it (the first watched one fired); -1: t_stop */
-    int act;             /* MODEL_ACT_* bits of the switch at its end (0 at t_stop) */
-    int next_state;      /* the machine state after the switch */
-    double next_slip;
-    double delta_max, P_max, delta_r, R_res;  /* the machine's impact record after the switch */
-    model_params params; /* the parameters during the segment */
-} ig_segment;
-
-/* The values at one sample that a summary reads: time, kinetic and potential energy, the
- * works of the contact forces (W_friction 0 without friction) and the state. */
-typedef struct {
-    double t, T, V, W_normal, W_friction;
-    double y[MODEL_NSTATE];
-} ig_point;
-
-/* What a run keeps for its summaries while ig_run goes from segment to segment (over all
- * its calls): begun by ig_tally_begin at the run's first sample, read by ig_summarize. */
-typedef struct {
-    ig_point start, last;             /* the run's first sample and its latest */
-    ig_point first_begin, first_end;  /* the first impact's first and last samples */
-    int impacts;                      /* impacts begun */
-    int first_switches;               /* phase switches within the first impact */
-    int first_stick_slip;             /* stick-slip changes within it (exact Coulomb) */
-    int ended;                        /* impacts ended */
-    double now_start;                 /* the latest impact's start, s */
-    double now_delta_max, now_P_max, now_delta_r, now_R_res;      /* its record at maximum compression */
-    double first_delta_max, first_P_max, first_delta_r, first_R_res;  /* the first impact's */
-    double delta_max, P_max, deepest_delta_r, deepest_R_res;  /* over the ended impacts: the
-                                                                 largest, and the deepest dent's */
-    double t_contact;                 /* contact time of the ended impacts, s */
-    double segment_start;             /* when the current segment began, s */
-    double t_sustained;               /* when sustained contact first began, s; NAN if never */
-} ig_tally;
-
-/* A run's summary (MODEL section 6), over the whole run or over its first impact: energies
- * at its two ends and the works between them, the impact record (the largest values, and the
- * deepest dent's delta_r and R_res), the contact time, the state at its end. NAN where there
- * is nothing to report: t_impact without an impact, t_sustained without sustained contact. */
-typedef struct {
-    double T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final;
-    double W_normal, W_friction, W_gravity, residual;
-    int n_switches, n_stick_slip;     /* the first impact's phase switches and stick-slip changes */
-    int impacts;                      /* in the whole run */
-    double y_final[MODEL_NSTATE];     /* the state at its end */
-} ig_summary;
-
-/* Begin the tally of a run at its first sample (t0, y0, with its outputs out0); in_contact:
- * the run starts with an impact (model_machine_start returned MODEL_START_CONTACT). */
-void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact);
-
-/* The two summaries of a tallied run: over the whole run (an impact still in contact counted
- * to the run's last sample), and over its first impact (the whole run if it had none; an
- * impact still in contact has no contact time). A run to separation reports the second. */
-void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impact);
 
 /* Begin a run of the phase machine m under p at (t0, y0), as every caller of ig_run does:
  * start the machine (model_machine_start, run_to_time as there), write sample 0 (t_buf[0],
