@@ -361,10 +361,9 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
 def generate_scene_header(gen: GeneratedModel, scene) -> str:
     """`<prefix>_scene.h`: one scene's inputs, initial state and solver settings as C, for
     drivers built beside the model (the model's own C holds no numbers)."""
-    from ..scene import METHODS  # the glue's IG_METHOD_* codes follow its order
     inputs = [f for f in assemble_model(gen.spec).params if f.row.kind == "input"]
     ctx = {"prefix": gen.prefix, "PREFIX": gen.prefix.upper(), "spec": gen.spec, "scene": scene,
-           "inputs": inputs, "method_code": METHODS.index(scene.solver.method), "methods": METHODS}
+           "inputs": inputs, "method_name": f"IG_METHOD_{scene.solver.method.upper()}"}
     return _tidy(_templates().get_template("scene.h.j2").render(ctx))
 
 

@@ -29,9 +29,9 @@ for name in GLUE_FILES:
     (work / name).write_text(_native(name))
 PY
 sundials=$("$PY" -c 'from impactgen.sundials import find_sundials as f; print(" ".join(f().cc_args()))')
+glue_sources=$("$PY" -c 'from impactgen.build import GLUE_FILES as g; print(" ".join("src/impactgen/native/" + f for f in g if f.endswith(".c")))')
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
-    -fno-sanitize-recover=undefined -I"$work" "$work/model.c" "$work/model_machine.c" "$work/cvode_glue.c" "$work/dopri5.c" \
-    "$work/small_kernels.c" "$work/tally.c" tests/c/glue_driver.c $sundials -lm -o "$work/driver"
+    -fno-sanitize-recover=undefined -I"$work" "$work"/*.c tests/c/glue_driver.c $sundials -lm -o "$work/driver"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/driver"
 "$CC" -std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
     -fno-sanitize-recover=undefined -I"$work" "$work/small_kernels.c" tests/c/kernels_driver.c \
@@ -60,7 +60,7 @@ for name, text in fmu_sources(scene, "both").files.items():
 PY
 SAN="-std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined"
 "$CC" $SAN -I"$work/driver_model" -Isrc/impactgen/native examples/c/impact_driver.c "$work/driver_model/model.c" \
-    "$work/driver_model/model_machine.c" src/impactgen/native/cvode_glue.c src/impactgen/native/dopri5.c src/impactgen/native/small_kernels.c src/impactgen/native/tally.c \
+    "$work/driver_model/model_machine.c" $glue_sources \
     $sundials -lm -o "$work/impact_driver"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/impact_driver" > /dev/null
 "$CC" $SAN -DFMU_MODEL_EXCHANGE -DFMU_CO_SIMULATION -I"$work/fmu" "$work"/fmu/*.c tests/c/fmu_driver.c \

@@ -19,7 +19,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "cvode_glue.h"
+#include "solver.h"
 #include "model_scene.h"
 
 /* the analytic Jacobian, when the model has one and the method is implicit */
@@ -62,13 +62,13 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
     int n = 1;  /* ig_run_begin wrote the start as sample 0 */
     for (;;) {
         int n_segments = 0;
-        const int flag = ig_run(s, &m, &p, &r->t, r->y, MODEL_SCENE_T_END, MODEL_SCENE_ATOL, MAX_SEGMENTS - begun,
+        const int flag = ig_run(s, &m, &p, &r->t, r->y, MODEL_SCENE_T_END, MODEL_SCENE_T_END, MODEL_SCENE_ATOL, MAX_SEGMENTS - begun,
                                 0, t_buf, y_buf, out_buf, NULL, CAPACITY, &n, segments, CAPACITY, &n_segments, &tally);
         begun += n_segments;
         n = 0;  /* the next call writes into emptied buffers */
         if (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL) continue;
         if (flag < 0) {
-            fprintf(stderr, "CVODE failed in %s at t = %g: %s\n", model_machine_state_name(m.state), r->t,
+            fprintf(stderr, "the integrator failed in %s at t = %g: %s\n", model_machine_state_name(m.state), r->t,
                     ig_solver_message(s));
             r->status = "failed";
         }

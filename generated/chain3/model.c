@@ -152,7 +152,7 @@ static double normal_force_slope(double delta, const model_params *p)
     }
 }
 
-/* The sines and cosines of the link angles, in model_trig's layout. */
+/* The sines and cosines of the link angles: trig[2 i] = sin(q_(i+1)), trig[2 i + 1] = cos(q_(i+1)). */
 static inline void trig_of(const double *y, double *trig)
 {
     const double q1 = y[0];
@@ -164,11 +164,6 @@ static inline void trig_of(const double *y, double *trig)
     trig[3] = cos(q2);
     trig[4] = sin(q3);
     trig[5] = cos(q3);
-}
-
-void model_trig(const double *y, double *trig)
-{
-    trig_of(y, trig);
 }
 
 /* The tip's motion and the contact forces on it, as one evaluation found them. */
@@ -260,7 +255,8 @@ static int accelerations(const double *y, const double *trig, const model_params
     return 0;
 }
 
-int model_rhs_trig(double t, const double *y, const double *trig, double *ydot, const model_params *p)
+/* The right-hand side, given the sines and cosines of y's angles (trig_of). */
+static int rhs_given_trig(double t, const double *y, const double *trig, double *ydot, const model_params *p)
 {
     (void)t;
     tip_forces c;
@@ -278,12 +274,13 @@ int model_rhs_trig(double t, const double *y, const double *trig, double *ydot, 
 
 int model_rhs(double t, const double *y, double *ydot, const model_params *p)
 {
-    double trig[MODEL_NTRIG];
+    double trig[6];
     trig_of(y, trig);
-    return model_rhs_trig(t, y, trig, ydot, p);
+    return rhs_given_trig(t, y, trig, ydot, p);
 }
 
-void model_events_trig(double t, const double *y, const double *trig, double *ev, const model_params *p)
+/* The event functions, given the sines and cosines of y's angles (trig_of). */
+static void events_given_trig(double t, const double *y, const double *trig, double *ev, const model_params *p)
 {
     (void)t;
     const double u1 = y[3];
@@ -315,15 +312,15 @@ void model_events_trig(double t, const double *y, const double *trig, double *ev
 
 void model_events(double t, const double *y, double *ev, const model_params *p)
 {
-    double trig[MODEL_NTRIG];
+    double trig[6];
     trig_of(y, trig);
-    model_events_trig(t, y, trig, ev, p);
+    events_given_trig(t, y, trig, ev, p);
 }
 
 void model_outputs(double t, const double *y, double *out, const model_params *p)
 {
     (void)t;
-    double trig[MODEL_NTRIG];
+    double trig[6];
     trig_of(y, trig);
     const double u1 = y[3];
     const double u2 = y[4];

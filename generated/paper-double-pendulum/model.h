@@ -15,7 +15,6 @@ extern "C" {
 
 #define MODEL_NQ 2
 #define MODEL_NSTATE 6
-#define MODEL_NTRIG 4  /* trig[2 i] = sin(q_(i+1)), trig[2 i + 1] = cos(q_(i+1)) */
 #define MODEL_NEVENT 5
 #define MODEL_NOUT 12
 #define MODEL_HAS_JACOBIAN 1
@@ -88,13 +87,6 @@ typedef struct {
 
 /* State y = [q1, q2, u1, u2, W_normal, W_friction]; W_* are the works of the contact forces. */
 int model_rhs(double t, const double *y, double *ydot, const model_params *p);
-/* The link angles' sines and cosines, y[0 .. NQ) being the angles; and the right-hand side and
- * events given them, for an integrator that has them at less cost than libm's (the explicit
- * pair shifts its step start's to its stages). Each equals the function above when trig is
- * model_trig(y). */
-void model_trig(const double *y, double *trig);
-int model_rhs_trig(double t, const double *y, const double *trig, double *ydot, const model_params *p);
-void model_events_trig(double t, const double *y, const double *trig, double *ev, const model_params *p);
 double model_normal_force(double delta, const model_params *p);
 void model_events(double t, const double *y, double *ev, const model_params *p);
 void model_outputs(double t, const double *y, double *out, const model_params *p);

@@ -10,7 +10,7 @@
 #include "model_machine.h"
 
 #define MODEL_SCENE_NAME "paper-double-pendulum"
-#define MODEL_SCENE_METHOD 4  /* IG_METHOD_*: 0 bdf 1 adams 2 erk 3 dopri5 4 auto */
+#define MODEL_SCENE_METHOD IG_METHOD_AUTO  /* solver.h's IG_METHOD_*: include it where this is used */
 #define MODEL_SCENE_RTOL 1e-10
 #define MODEL_SCENE_ATOL 1e-12
 #define MODEL_SCENE_RUN_TO_TIME 0  /* 0: stop at the first separation */

@@ -41,9 +41,11 @@ from .sundials import Sundials, find_sundials
 COMPILE_ARGS = ("-O3", "-fno-math-errno")
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
-GLUE_FILES = ("cvode_glue.c", "cvode_glue.h", "dopri5.c", "dopri5.h", "small_kernels.c", "small_kernels.h",
-              "tally.c", "tally.h")
-CDEF_HEADERS = ("tally.h", "cvode_glue.h")  # the runtime's declarations cffi reads, in this order
+# the runtime written once for every model: the solver over its steppers, the run loop, the tallies
+GLUE_FILES = ("solver.h", "solver_state.h", "solver.c", "run.c", "tally.h", "tally.c", "stepper.h",
+              "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c", "step_pair.c", "step_auto.c",
+              "dopri5.h", "dopri5.c", "small_kernels.h", "small_kernels.c")
+CDEF_HEADERS = ("stepper.h", "tally.h", "solver.h")  # the runtime's declarations cffi reads, in this order
 MANIFEST = "manifest.json"
 
 if TYPE_CHECKING:  # the generator (sympy) is imported only to build a model, not to load one
@@ -168,7 +170,7 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
     ffi.cdef(gen.cdef + _glue_cdef())
     ffi.set_source(
         module_name,
-        '#include "model.h"\n#include "model_machine.h"\n#include "cvode_glue.h"\n',
+        '#include "model.h"\n#include "model_machine.h"\n#include "solver.h"\n',
         sources=[str(workdir / name) for name in (*gen.files(), *GLUE_FILES) if name.endswith(".c")],
         include_dirs=[str(workdir), *sundials.include_dirs],
         library_dirs=list(sundials.library_dirs),

@@ -17,7 +17,7 @@ import numpy as np
 from .build import CompiledModel
 from .errors import SolverError
 from .results import BUDGET, SummaryLayout, Tallied, TallyRecords
-from .scene import EXPLICIT_METHODS, METHODS, Scene
+from .scene import EXPLICIT_METHODS, Scene
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
@@ -153,7 +153,7 @@ class CvodeSession:
         self.model = model
         self.pool_key = pool_key  # where `close` hands it back (`open` made it)
         ffi = model.ffi
-        self.method = METHODS.index(scene.solver.method)  # IG_METHOD_BDF, _ADAMS, _ERK, _DOPRI5, _AUTO
+        self.method = method_code(model.lib, scene.solver.method)
         self.analytic = 1 if uses_jacobian(model, scene) else 0
         self.capacity = FIRST_BUFFER
         self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
@@ -243,7 +243,7 @@ class CvodeSession:
         base = 0  # samples before this call's buffers
         self.n_out[0] = 1  # the start, written by begin
         while True:
-            flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, atol,
+            flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, t_stop, atol,
                               max_segments - len(segments), every_step, self.t_buf, self.y_buf, self.out_buf,
                               self.d_buf if dense else ffi.NULL, self.capacity, self.n_out, self.segments,
                               SEGMENT_CAPACITY, self.n_segments, self.tally)
@@ -298,6 +298,11 @@ class CvodeSession:
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
         return likely_cause(text or "CVODE failed without a message")
+
+
+def method_code(lib, method: str) -> int:
+    """The library's IG_METHOD_<NAME> of a method named in a scene (scene.METHODS)."""
+    return getattr(lib, f"IG_METHOD_{method.upper()}")
 
 
 def uses_jacobian(model: CompiledModel, scene: Scene) -> bool:

@@ -7,7 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "cvode_glue.h"
+#include "solver.h"
 
 static int failures = 0;
 #define EXPECT(cond, what) do { if (!(cond)) { printf("FAILED: %s\n", what); failures++; } } while (0)
@@ -153,16 +153,16 @@ int main(void)
         s = paper_run(methods[which], &q, &m, y, atol);
         EXPECT(s != NULL, "solver for ig_run created");
         n = 0;
-        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg,
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 0, &n, segs, 1, &n_seg,
                       NULL) == IG_ERR_USAGE && ig_solver_message(s)[0], "ig_run without room for a sample refused");
         n = 7;
-        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 7, &n, segs, 1, &n_seg,
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 7, &n, segs, 1, &n_seg,
                       NULL) == IG_ERR_USAGE, "ig_run into full buffers refused (not a loop that never ends)");
         ig_outputs(&q, 1, &t, y, out);
         ig_tally_begin(&tally, t, y, out, m.impacts > 0);
         do {
             n = 0;  /* the buffers emptied before each call */
-            flag = ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, every ? 7 : 1, &n,
+            flag = ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, every ? 7 : 1, &n,
                           segs, 1, &n_seg, &tally);
             segments_of[every] += n_seg;
             EXPECT(n_seg == 0 || segs[0].t == t_buf[segs[0].sample], "a segment's end is its last sample");
@@ -194,7 +194,7 @@ int main(void)
         int n_seg = 0;
         s = paper_run(IG_METHOD_BDF, &q, &m, y, atol);
         n = 0;
-        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1e-12, 1, 0, t_buf, y_buf, out, NULL, 7, &n, segs, 4, &n_seg, NULL)
+        EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 1, 0, t_buf, y_buf, out, NULL, 7, &n, segs, 4, &n_seg, NULL)
                == IG_ERR_SEGMENTS && n_seg == 1, "ig_run stops at max_segments");
         ig_solver_free(s);
     }

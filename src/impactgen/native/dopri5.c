@@ -1,13 +1,14 @@
 /*
- * dopri5.c: Dormand and Prince's 5(4) pair with dense output and root finding (dopri5.h).
+ * dopri5.c: Dormand and Prince's 5(4) pair with dense output and root finding (dopri5.h),
+ * for any n: the right-hand side and the event functions are callbacks.
  */
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "dopri5.h"
 
-#define N MODEL_NSTATE
 #define SAFE 0.9          /* safety factor of the step-size controller */
 #define FAC_MIN 0.2       /* the step shrinks at most 5x ... */
 #define FAC_MAX 10.0      /* ... and grows at most 10x per step */
@@ -20,12 +21,6 @@
 #define FAC_MIN_START 1e-3 /* until a start's first step is accepted, a rejected step shrinks by the error's
                             * own h^5 law (at most this much): the starting guess can be far off where a
                             * force law begins at 0 (Hertz's delta^1.5 at first contact) */
-#define TRIG_SHIFT_MAX 0.0625 /* a stage's angle within this of the step start's (rad): its sine and cosine
-                               * come from the start's (stage_trig), beyond it from libm */
-#define TRIG_SHIFT_SHORT 0x1p-10 /* ... within this, by shorter series (contact steps move the angles by 1e-5) */
-#define TRIG_CHAIN_MAX 6  /* an accepted step's end takes its sines and cosines from its start's this many times
-                           * in a row at most, then from libm: each shift adds at most 0.51 units of 2^-52, so
-                           * the chain stays within 3.6 units, under libm's 4 at an angle rounded to a double */
 
 /* Dormand and Prince's tableau, its error weights and its dense-output weights. */
 static const double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
@@ -43,88 +38,18 @@ static const double d1 = -12715105075.0 / 11282082432.0, d3 = 87487479700.0 / 32
                     d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0,
                     d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
 
-/* model_rhs returns nonzero where it fails, and for any derivative that is not finite. */
+/* The right-hand side, counted; nonzero where it fails. */
 static int rhs(ig_dopri5 *r, double t, const double *y, double *f)
 {
     r->nfev++;
-    return model_rhs(t, y, f, r->params) != 0 ? -1 : 0;
+    return r->rhs(t, y, f, r->user) != 0 ? -1 : 0;
 }
 
-/* The same, given the sines and cosines of y's angles (model_trig's layout). */
-static int rhs_trig(ig_dopri5 *r, double t, const double *y, const double *trig, double *f)
-{
-    r->nfev++;
-    return model_rhs_trig(t, y, trig, f, r->params) != 0 ? -1 : 0;
-}
-
-static void watched_trig(ig_dopri5 *r, double t, const double *y, const double *trig, double *g)
-{
-    double ev[MODEL_NEVENT];
-    r->ngev++;
-    model_events_trig(t, y, trig, ev, r->params);
-    for (int k = 0; k < r->nevents; ++k) g[k] = ev[r->events[k]];
-}
-
+/* The watched event functions, counted. */
 static void watched(ig_dopri5 *r, double t, const double *y, double *g)
 {
-    double trig[MODEL_NTRIG];
-    model_trig(y, trig);
-    watched_trig(r, t, y, trig, g);
-}
-
-/* cos d - 1 and sin d by their Taylor series: to d^8 and d^9 for |d| <= TRIG_SHIFT_MAX, where
- * the first terms left out, d^10 / 10! and d^11 / 11!, are below 3e-19 and 3e-21; to d^4 and
- * d^5 for |d| <= TRIG_SHIFT_SHORT, where d^6 / 6! and d^7 / 7! are below 3e-21 and 3e-25. */
-static inline void shift_series_long(double d, double *cm1, double *sd)
-{
-    const double z = d * d;
-    *cm1 = z * (-1.0 / 2 + z * (1.0 / 24 + z * (-1.0 / 720 + z * (1.0 / 40320))));
-    *sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120 + z * (-1.0 / 5040 + z * (1.0 / 362880))));
-}
-
-static inline void shift_series_short(double d, double *cm1, double *sd)
-{
-    const double z = d * d;
-    *cm1 = z * (-1.0 / 2 + z * (1.0 / 24));
-    *sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120));
-}
-
-/* sin(q + d) and cos(q + d) into out[0], out[1] from s = sin q, c = cos q and the series of d, as
- * s + (s (cos d - 1) + c sin d) and c + (c (cos d - 1) - s sin d). Either series is far under an
- * ulp of the result: it is libm's to about an ulp (the start's own rounding and the sum's), at a
- * fraction of the cost. */
-static inline void rotate(double s, double c, double cm1, double sd, double *out)
-{
-    out[0] = s + (s * cm1 + c * sd);
-    out[1] = c + (c * cm1 - s * sd);
-}
-
-/* The sines and cosines of the angles of y = y0 + dy (the angles are y[0 .. MODEL_NQ)), from
- * y0's in trig0: by the short series for |dy| <= TRIG_SHIFT_SHORT, the long one up to
- * TRIG_SHIFT_MAX, libm beyond. */
-static inline void stage_trig(const double *trig0, const double *dy, const double *y, double *trig)
-{
-    for (int i = 0; i < MODEL_NQ; ++i) {
-        const double d = dy[i], a = fabs(d);
-        double cm1, sd;
-        if (a <= TRIG_SHIFT_SHORT) {
-            shift_series_short(d, &cm1, &sd);
-        } else if (a <= TRIG_SHIFT_MAX) {
-            shift_series_long(d, &cm1, &sd);
-        } else {
-            trig[2 * i] = sin(y[i]);
-            trig[2 * i + 1] = cos(y[i]);
-            continue;
-        }
-        rotate(trig0[2 * i], trig0[2 * i + 1], cm1, sd, trig + 2 * i);
-    }
-}
-
-/* r->trig from libm at r->y: the chain of shifted end points (TRIG_CHAIN_MAX) starts again. */
-static void trig_from_libm(ig_dopri5 *r)
-{
-    model_trig(r->y, r->trig);
-    r->trig_chain = 0;
+    r->ngev++;
+    if (r->nevents > 0) r->events(t, y, g, r->user);
 }
 
 /* The smaller and larger of two numbers that are not NaN (infinities are fine): fmin and fmax
@@ -148,9 +73,10 @@ static double sign_of(double v)
 /* Hairer's starting step: from the sizes of y0, f(y0) and an estimate of the second derivative. */
 static double first_step(ig_dopri5 *r, double *scratch, double *f1)
 {
+    const int n = r->n;
     const double *y = r->y, *f0 = r->k[0];
     double dnf = 0.0, dny = 0.0;
-    for (int i = 0; i < N; ++i) {
+    for (int i = 0; i < n; ++i) {
         const double sk = r->atol[i] + r->rtol * fabs(y[i]);
         dnf += (f0[i] / sk) * (f0[i] / sk);
         dny += (y[i] / sk) * (y[i] / sk);
@@ -158,10 +84,10 @@ static double first_step(ig_dopri5 *r, double *scratch, double *f1)
     const double span = r->t_stop - r->t;
     double h = (dnf <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf) * 0.01;
     h = fmin(h, span);
-    for (int i = 0; i < N; ++i) scratch[i] = y[i] + h * f0[i];
+    for (int i = 0; i < n; ++i) scratch[i] = y[i] + h * f0[i];
     if (rhs(r, r->t + h, scratch, f1) != 0) return fmin(h * 1e-3, span);
     double der2 = 0.0;
-    for (int i = 0; i < N; ++i) {
+    for (int i = 0; i < n; ++i) {
         const double sk = r->atol[i] + r->rtol * fabs(y[i]);
         der2 += ((f1[i] - f0[i]) / sk) * ((f1[i] - f0[i]) / sk);
     }
@@ -171,30 +97,69 @@ static double first_step(ig_dopri5 *r, double *scratch, double *f1)
     return fmin(fmin(100.0 * h, h1), span);
 }
 
-int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const double *y0, double t_stop,
-                    double rtol, const double *atol, const int *events, const int *directions, int nevents,
-                    double h_hint)
+int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn, ig_dopri5_events_fn events,
+                   void *user)
 {
-    r->params = params;
+    memset(r, 0, sizeof *r);
+    if (n < 1 || max_events < 0 || !rhs_fn || (max_events > 0 && !events)) return -1;
+    const size_t vectors = IG_DOPRI5_STAGES + 5 + 6;  /* k, cont, atol, y, y1, y6, tmp, ymid */
+    const size_t event_arrays = 8;                      /* g, side, g_end, g_lo, g_hi, g_now, t_root, directions */
+    double *memory = (double *)malloc(sizeof(double) * (vectors * (size_t)n + event_arrays * (size_t)(max_events + 1)));
+    if (!memory) return -1;
+    r->memory = memory;
+    r->n = n;
+    r->max_events = max_events;
+    r->rhs = rhs_fn;
+    r->events = events;
+    r->user = user;
+    double *next = memory;
+    for (int s = 0; s < IG_DOPRI5_STAGES; ++s, next += n) r->k[s] = next;
+    for (int s = 0; s < 5; ++s, next += n) r->cont[s] = next;
+    r->atol = next; next += n;
+    r->y = next; next += n;
+    r->y1 = next; next += n;
+    r->y6 = next; next += n;
+    r->tmp = next; next += n;
+    r->ymid = next; next += n;
+    const int m = max_events + 1;  /* never an empty array */
+    r->g = next; next += m;
+    r->side = next; next += m;
+    r->g_end = next; next += m;
+    r->g_lo = next; next += m;
+    r->g_hi = next; next += m;
+    r->g_now = next; next += m;
+    r->t_root = next; next += m;
+    r->directions = (int *)next;  /* m ints fit in m doubles */
+    return 0;
+}
+
+void ig_dopri5_free(ig_dopri5 *r)
+{
+    free(r->memory);
+    memset(r, 0, sizeof *r);
+}
+
+int ig_dopri5_start(ig_dopri5 *r, double t0, const double *y0, double t_stop, double rtol, const double *atol,
+                    const int *directions, int nevents, double h_hint)
+{
+    const int n = r->n;
+    r->started = 0;
+    if (nevents < 0 || nevents > r->max_events) return IG_DOPRI5_NOT_STARTED;
     r->rtol = rtol;
-    memcpy(r->atol, atol, sizeof r->atol);
+    memcpy(r->atol, atol, sizeof(double) * (size_t)n);
     r->t = r->t_old = t0;
     r->t_stop = t_stop;
-    memcpy(r->y, y0, sizeof r->y);
+    memcpy(r->y, y0, sizeof(double) * (size_t)n);
     r->log_fac_old = log(ERR_FLOOR);
     r->rejected = 0;
     r->nsteps = r->nfev = r->netfails = r->ngev = 0;
     r->stiff_count = r->smooth_count = r->stiff = 0;
     r->nevents = nevents;
-    for (int k = 0; k < nevents; ++k) {
-        r->events[k] = events[k];
-        r->directions[k] = directions[k];
-    }
-    trig_from_libm(r);
-    if (rhs_trig(r, t0, r->y, r->trig, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
+    for (int k = 0; k < nevents; ++k) r->directions[k] = directions[k];
+    if (rhs(r, t0, r->y, r->k[0]) != 0) return IG_DOPRI5_RHS_FAILED;
     r->h = first_step(r, r->k[1], r->k[2]);
     if (h_hint > 0.0) r->h = fmin(r->h, h_hint);
-    watched_trig(r, t0, r->y, r->trig, r->g);
+    watched(r, t0, r->y, r->g);
     int at_zero = 0;
     for (int k = 0; k < nevents; ++k) {
         r->side[k] = sign_of(r->g[k]);
@@ -202,66 +167,53 @@ int ig_dopri5_start(ig_dopri5 *r, const model_params *params, double t0, const d
     }
     if (at_zero) {  /* an event function starting at 0: its side is where it goes (as CVODE decides) */
         const double dt = fmin(fmax(ROOT_TOLERANCE * DBL_EPSILON * (fabs(t0) + r->h), 1e-3 * r->h), 0.5 * r->h);
-        double y_near[N], g_near[MODEL_NEVENT];
-        for (int i = 0; i < N; ++i) y_near[i] = r->y[i] + dt * r->k[0][i];
-        watched(r, t0 + dt, y_near, g_near);
+        for (int i = 0; i < n; ++i) r->tmp[i] = r->y[i] + dt * r->k[0][i];
+        watched(r, t0 + dt, r->tmp, r->g_hi);
         for (int k = 0; k < nevents; ++k) {
-            if (r->side[k] == 0.0) r->side[k] = sign_of(g_near[k]);
+            if (r->side[k] == 0.0) r->side[k] = sign_of(r->g_hi[k]);
         }
     }
     /* the polynomial of a zero-length step: constant y (for an interpolation before any step) */
     r->h_old = 0.0;
-    memcpy(r->cont[0], r->y, sizeof r->y);
-    memcpy(r->trig_old, r->trig, sizeof r->trig);
-    memset(r->cont[1], 0, sizeof r->cont - sizeof r->cont[0]);
+    memcpy(r->cont[0], r->y, sizeof(double) * (size_t)n);
+    for (int s = 1; s < 5; ++s) memset(r->cont[s], 0, sizeof(double) * (size_t)n);
+    r->started = 1;
     return 0;
 }
 
-/* The stages of a step of size h from (t, y); the new state in y1 with its sines and cosines
- * in trig1, the sixth stage's state in y6 (for the stiffness estimate), and the error norm.
- * The stages take their angles' sines and cosines from the step start's (stage_trig); the
- * end point too while r->trig_chain < TRIG_CHAIN_MAX, else from libm (the chain of shifts
- * from the last libm values is kept short). */
-static int attempt(ig_dopri5 *r, double h, double *y1, double *y6, double *trig1, double *err)
+/* The stages of a step of size h from (t, y); the new state in y1, the sixth stage's state
+ * in y6 (for the stiffness estimate), and the error norm (Hairer's: the root mean square of
+ * the errors scaled by atol + rtol max(|y|, |y1|)). */
+static int attempt(ig_dopri5 *r, double h, double *y1, double *y6, double *err)
 {
-    double (*k)[N] = r->k, dy[N], tmp[N], trig[MODEL_NTRIG];
+    const int n = r->n;
+    double *const *k = r->k, *tmp = r->tmp;
     const double t = r->t, *y = r->y;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + (dy[i] = h * a21 * k[0][i]);
-    stage_trig(r->trig, dy, tmp, trig);
-    if (rhs_trig(r, t + c2 * h, tmp, trig, k[1]) != 0) return -1;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + (dy[i] = h * (a31 * k[0][i] + a32 * k[1][i]));
-    stage_trig(r->trig, dy, tmp, trig);
-    if (rhs_trig(r, t + c3 * h, tmp, trig, k[2]) != 0) return -1;
-    for (int i = 0; i < N; ++i) tmp[i] = y[i] + (dy[i] = h * (a41 * k[0][i] + a42 * k[1][i] + a43 * k[2][i]));
-    stage_trig(r->trig, dy, tmp, trig);
-    if (rhs_trig(r, t + c4 * h, tmp, trig, k[3]) != 0) return -1;
-    for (int i = 0; i < N; ++i) {
-        tmp[i] = y[i] + (dy[i] = h * (a51 * k[0][i] + a52 * k[1][i] + a53 * k[2][i] + a54 * k[3][i]));
+    for (int i = 0; i < n; ++i) tmp[i] = y[i] + h * a21 * k[0][i];
+    if (rhs(r, t + c2 * h, tmp, k[1]) != 0) return -1;
+    for (int i = 0; i < n; ++i) tmp[i] = y[i] + h * (a31 * k[0][i] + a32 * k[1][i]);
+    if (rhs(r, t + c3 * h, tmp, k[2]) != 0) return -1;
+    for (int i = 0; i < n; ++i) tmp[i] = y[i] + h * (a41 * k[0][i] + a42 * k[1][i] + a43 * k[2][i]);
+    if (rhs(r, t + c4 * h, tmp, k[3]) != 0) return -1;
+    for (int i = 0; i < n; ++i) {
+        tmp[i] = y[i] + h * (a51 * k[0][i] + a52 * k[1][i] + a53 * k[2][i] + a54 * k[3][i]);
     }
-    stage_trig(r->trig, dy, tmp, trig);
-    if (rhs_trig(r, t + c5 * h, tmp, trig, k[4]) != 0) return -1;
-    for (int i = 0; i < N; ++i) {
-        y6[i] = y[i] + (dy[i] = h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]));
+    if (rhs(r, t + c5 * h, tmp, k[4]) != 0) return -1;
+    for (int i = 0; i < n; ++i) {
+        y6[i] = y[i] + h * (a61 * k[0][i] + a62 * k[1][i] + a63 * k[2][i] + a64 * k[3][i] + a65 * k[4][i]);
     }
-    stage_trig(r->trig, dy, y6, trig);
-    if (rhs_trig(r, t + h, y6, trig, k[5]) != 0) return -1;
-    for (int i = 0; i < N; ++i) {
+    if (rhs(r, t + h, y6, k[5]) != 0) return -1;
+    for (int i = 0; i < n; ++i) {
         y1[i] = y[i] + h * (a71 * k[0][i] + a73 * k[2][i] + a74 * k[3][i] + a75 * k[4][i] + a76 * k[5][i]);
     }
-    if (r->trig_chain < TRIG_CHAIN_MAX) {
-        for (int i = 0; i < MODEL_NQ; ++i) dy[i] = y1[i] - y[i];  /* exact where y1 is within 2x of y */
-        stage_trig(r->trig, dy, y1, trig1);
-    } else {
-        model_trig(y1, trig1);
-    }
-    if (rhs_trig(r, t + h, y1, trig1, k[6]) != 0) return -1;
+    if (rhs(r, t + h, y1, k[6]) != 0) return -1;
     double sum = 0.0;
-    for (int i = 0; i < N; ++i) {
+    for (int i = 0; i < n; ++i) {
         const double e = h * (e1 * k[0][i] + e3 * k[2][i] + e4 * k[3][i] + e5 * k[4][i] + e6 * k[5][i] + e7 * k[6][i]);
         const double sk = r->atol[i] + r->rtol * larger(fabs(y[i]), fabs(y1[i]));
         sum += (e / sk) * (e / sk);
     }
-    *err = sqrt(sum / N);
+    *err = sqrt(sum / n);
     return isfinite(*err) ? 0 : -1;
 }
 
@@ -270,7 +222,7 @@ static int attempt(ig_dopri5 *r, double h, double *y1, double *y6, double *trig1
 static double stiffness_estimate(const ig_dopri5 *r, double h, const double *y1, const double *y6)
 {
     double num = 0.0, den = 0.0;
-    for (int i = 0; i < N; ++i) {
+    for (int i = 0; i < r->n; ++i) {
         num += (r->k[6][i] - r->k[5][i]) * (r->k[6][i] - r->k[5][i]);
         den += (y1[i] - y6[i]) * (y1[i] - y6[i]);
     }
@@ -280,49 +232,36 @@ static double stiffness_estimate(const ig_dopri5 *r, double h, const double *y1,
 /* The continuous extension of the step just accepted (y still the old state). */
 static void keep_extension(ig_dopri5 *r, double h, const double *y1)
 {
-    const double (*k)[N] = (const double (*)[N])r->k;
-    for (int i = 0; i < N; ++i) {
+    double *const *k = r->k, *const *cont = r->cont;
+    for (int i = 0; i < r->n; ++i) {
         const double ydiff = y1[i] - r->y[i];
         const double bspl = h * k[0][i] - ydiff;
-        r->cont[0][i] = r->y[i];
-        r->cont[1][i] = ydiff;
-        r->cont[2][i] = bspl;
-        r->cont[3][i] = ydiff - h * k[6][i] - bspl;
-        r->cont[4][i] = h * (d1 * k[0][i] + d3 * k[2][i] + d4 * k[3][i] + d5 * k[4][i] + d6 * k[5][i] + d7 * k[6][i]);
-    }
-}
-
-/* y at t within the last step, and dy = y - y(t_old) as the extension gives it. */
-static inline void interpolate_with_increment(const ig_dopri5 *r, double t, double *y, double *dy)
-{
-    const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
-    for (int i = 0; i < N; ++i) {
-        y[i] = r->cont[0][i] + (dy[i] = s * (r->cont[1][i] + s1 * (r->cont[2][i] + s * (r->cont[3][i] + s1 * r->cont[4][i]))));
+        cont[0][i] = r->y[i];
+        cont[1][i] = ydiff;
+        cont[2][i] = bspl;
+        cont[3][i] = ydiff - h * k[6][i] - bspl;
+        cont[4][i] = h * (d1 * k[0][i] + d3 * k[2][i] + d4 * k[3][i] + d5 * k[4][i] + d6 * k[5][i] + d7 * k[6][i]);
     }
 }
 
 void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
 {
-    double dy[N];
-    interpolate_with_increment(r, t, y, dy);
-}
-
-/* The same, with the sines and cosines of y's angles from the step start's. */
-static void interpolate_trig(const ig_dopri5 *r, double t, double *y, double *trig)
-{
-    double dy[N];
-    interpolate_with_increment(r, t, y, dy);
-    stage_trig(r->trig_old, dy, y, trig);
+    const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
+    double *const *cont = r->cont;
+    for (int i = 0; i < r->n; ++i) {
+        y[i] = cont[0][i] + s * (cont[1][i] + s1 * (cont[2][i] + s * (cont[3][i] + s1 * cont[4][i])));
+    }
 }
 
 void ig_dopri5_taylor(const ig_dopri5 *r, double *rows)
 {
     /* the extension in powers of s = (t - t_old) / h_old, shifted to the s of r->t */
+    const int n = r->n;
     const double s0 = r->h_old != 0.0 ? (r->t - r->t_old) / r->h_old : 0.0;
     static const double binomial[5][5] = {{1, 0, 0, 0, 0}, {1, 1, 0, 0, 0}, {1, 2, 1, 0, 0}, {1, 3, 3, 1, 0},
                                           {1, 4, 6, 4, 1}};
-    for (int i = 0; i < N; ++i) {
-        const double (*c)[N] = (const double (*)[N])r->cont;
+    double *const *c = r->cont;
+    for (int i = 0; i < n; ++i) {
         const double a[5] = {c[0][i], c[1][i] + c[2][i], -c[2][i] + c[3][i] + c[4][i], -c[3][i] - 2.0 * c[4][i],
                              c[4][i]};
         double scale = 1.0;
@@ -332,7 +271,7 @@ void ig_dopri5_taylor(const ig_dopri5 *r, double *rows)
                 b += a[m] * binomial[m][j] * power;
                 power *= s0;
             }
-            rows[j * N + i] = r->h_old != 0.0 ? b / scale : (j == 0 ? b : 0.0);
+            rows[j * n + i] = r->h_old != 0.0 ? b / scale : (j == 0 ? b : 0.0);
             scale *= r->h_old;
         }
     }
@@ -348,17 +287,18 @@ static int crossed(const ig_dopri5 *r, int k, double g)
 }
 
 /* The first time in [t_lo, t_hi] where event k reaches the crossed side (Illinois on the
- * continuous extension of the last step): the right end of a bracket narrower than tol. */
+ * continuous extension of the last step): the right end of a bracket narrower than tol.
+ * Uses r->ymid and r->g_hi (free while locate runs). */
 static double locate(ig_dopri5 *r, int k, double t_lo, double g_lo, double t_hi, double g_hi, double tol)
 {
-    double y[N], trig[MODEL_NTRIG], g[MODEL_NEVENT];
+    double *y = r->ymid, *g = r->g_hi;
     const double side = r->side[k];
     int kept = 0;  /* which end stayed the last time (Illinois halves its value) */
     for (int it = 0; it < ROOT_ITERATIONS && t_hi - t_lo > tol; ++it) {
         double t_mid = t_hi - g_hi * (t_hi - t_lo) / (g_hi - g_lo);
         if (!(t_mid > t_lo + tol / 2 && t_mid < t_hi - tol / 2)) t_mid = 0.5 * (t_lo + t_hi);
-        interpolate_trig(r, t_mid, y, trig);
-        watched_trig(r, t_mid, y, trig, g);
+        ig_dopri5_interpolate(r, t_mid, y);
+        watched(r, t_mid, y, g);
         if (sign_of(g[k]) == side) {  /* still on the old side */
             t_lo = t_mid;
             g_lo = g[k];
@@ -386,17 +326,51 @@ static int some_unarmed(const ig_dopri5 *r)
     return 0;
 }
 
+/* The first crossing within [t_lo, t_hi] (the events at t_hi in g_hi, some crossed): each
+ * crossed event located, the earliest kept with any as close; r->t and r->y moved to it. */
+static void first_root(ig_dopri5 *r, double t_lo, double t_hi, int *roots_found, double tol)
+{
+    const int nevents = r->nevents;
+    double *t_root = r->t_root, *g_end_now = r->g_now, *g_lo = r->g_lo, first = t_hi;
+    memcpy(g_end_now, r->g_hi, sizeof(double) * (size_t)nevents);
+    for (int k = 0; k < nevents; ++k) t_root[k] = INFINITY;
+    /* each pass looks at the interval's end as the roots found so far have cut it: an event
+     * back on its old side at t_hi may have crossed and come back before a root (the yield of
+     * a grazing impact, crossed up and down about the maximum compression that ends the step) */
+    for (int located = 0;;) {
+        const double end = first;
+        const int before = located;
+        for (int k = 0; k < nevents; ++k) {
+            if (t_root[k] < INFINITY || !crossed(r, k, g_end_now[k])) continue;
+            const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
+            t_root[k] = locate(r, k, t_lo, lo, end, g_end_now[k], tol);
+            first = smaller(first, t_root[k]);
+            ++located;
+        }
+        if (located == before || located == nevents || first == end) break;
+        ig_dopri5_interpolate(r, first, r->ymid);
+        watched(r, first, r->ymid, g_end_now);
+    }
+    for (int k = 0; k < nevents; ++k) roots_found[k] = t_root[k] <= first + tol;
+    if (first < r->t) {
+        r->t = first;
+        ig_dopri5_interpolate(r, first, r->y);
+    }
+}
+
 int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
 {
+    const int n = r->n;
     const double expo = 0.2 - BETA * 0.75;
-    double y1[N], y6[N], trig1[MODEL_NTRIG], err = 0.0;
+    double *y1 = r->y1, *y6 = r->y6, err = 0.0;
     int retries = 0;
+    if (!r->started) return IG_DOPRI5_NOT_STARTED;
     for (;;) {
         double h = r->h;
         if (0.1 * fabs(h) <= fabs(r->t) * DBL_EPSILON || !(h > 0.0)) return IG_DOPRI5_TOO_SMALL;
         const int last = r->t + 1.01 * h >= r->t_stop;
         if (last) h = r->t_stop - r->t;
-        if (attempt(r, h, y1, y6, trig1, &err) != 0) {  /* the right-hand side failed: a smaller step */
+        if (attempt(r, h, y1, y6, &err) != 0) {  /* the right-hand side failed: a smaller step */
             if (++retries > RHS_RETRIES) return IG_DOPRI5_RHS_FAILED;
             r->netfails++;
             r->h = 0.25 * h;
@@ -422,11 +396,8 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         r->t_old = r->t;
         r->h_old = h;
         r->t = last ? r->t_stop : r->t + h;
-        memcpy(r->y, y1, sizeof r->y);
-        memcpy(r->trig_old, r->trig, sizeof r->trig);
-        memcpy(r->trig, trig1, sizeof r->trig);
-        r->trig_chain = r->trig_chain < TRIG_CHAIN_MAX ? r->trig_chain + 1 : 0;
-        memcpy(r->k[0], r->k[6], sizeof r->k[0]);  /* first same as last */
+        memcpy(r->y, y1, sizeof(double) * (size_t)n);
+        memcpy(r->k[0], r->k[6], sizeof(double) * (size_t)n);  /* first same as last */
         if (r->rejected) h_new = smaller(h_new, h);
         const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
         r->h = last ? larger(h_new, r->h) : h_new;  /* a step cut to t_stop proposes what it was cut from */
@@ -441,59 +412,37 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         break;
     }
     /* the watched events over the step: at its end, and inside it while some is not armed */
-    double g_end[MODEL_NEVENT], g_lo[MODEL_NEVENT], g_hi[MODEL_NEVENT], t_lo = r->t_old;
-    memcpy(g_lo, r->g, sizeof g_lo);
-    watched_trig(r, r->t, r->y, r->trig, g_end);
+    double *g_end = r->g_end, *g_lo = r->g_lo, *g_hi = r->g_hi, t_lo = r->t_old;
+    const size_t event_bytes = sizeof(double) * (size_t)r->nevents;
+    memcpy(g_lo, r->g, event_bytes);
+    watched(r, r->t, r->y, g_end);
     const int points = some_unarmed(r) ? INSIDE_POINTS : 0;
     const double tol = ROOT_TOLERANCE * DBL_EPSILON * larger(fabs(r->t), fabs(r->h_old));
     for (int j = 1; j <= points + 1; ++j) {
         const double t_hi = j > points ? r->t : r->t_old + r->h_old * j / (points + 1);
         if (j > points) {
-            memcpy(g_hi, g_end, sizeof g_hi);
+            memcpy(g_hi, g_end, event_bytes);
         } else {
-            double y[N], trig[MODEL_NTRIG];
-            interpolate_trig(r, t_hi, y, trig);
-            watched_trig(r, t_hi, y, trig, g_hi);
+            ig_dopri5_interpolate(r, t_hi, r->ymid);
+            watched(r, t_hi, r->ymid, g_hi);
         }
         int any = 0;
         for (int k = 0; k < r->nevents; ++k) any |= crossed(r, k, g_hi[k]);
-        if (any) {  /* the first crossing: each crossed event located, the earliest kept with any as close */
-            double t_root[MODEL_NEVENT], g_end_now[MODEL_NEVENT], first = t_hi;
-            memcpy(g_end_now, g_hi, sizeof g_end_now);
-            for (int k = 0; k < r->nevents; ++k) t_root[k] = INFINITY;
-            /* each pass looks at the interval's end as the roots found so far have cut it: an
-             * event back on its old side at t_hi may have crossed and come back before a root
-             * (the yield of a grazing impact, crossed up and down about the maximum compression
-             * that ends the step) */
-            for (int located = 0;;) {
-                const double end = first;
-                const int before = located;
-                for (int k = 0; k < r->nevents; ++k) {
-                    if (t_root[k] < INFINITY || !crossed(r, k, g_end_now[k])) continue;
-                    const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
-                    t_root[k] = locate(r, k, t_lo, lo, end, g_end_now[k], tol);
-                    first = smaller(first, t_root[k]);
-                    ++located;
-                }
-                if (located == before || located == r->nevents || first == end) break;
-                double y_first[N], trig[MODEL_NTRIG];
-                interpolate_trig(r, first, y_first, trig);
-                watched_trig(r, first, y_first, trig, g_end_now);
-            }
-            for (int k = 0; k < r->nevents; ++k) roots_found[k] = t_root[k] <= first + tol;
-            if (first < r->t) {
-                r->t = first;
-                ig_dopri5_interpolate(r, first, r->y);
-                trig_from_libm(r);
-            }
+        if (any) {
+            first_root(r, t_lo, t_hi, roots_found, tol);
+            r->started = 0;  /* the segment ends at the root (dopri5.h) */
             return IG_DOPRI5_ROOT;
         }
         for (int k = 0; k < r->nevents; ++k) {
             if (g_hi[k] != 0.0) r->side[k] = sign_of(g_hi[k]);
         }
-        memcpy(g_lo, g_hi, sizeof g_lo);
+        memcpy(g_lo, g_hi, event_bytes);
         t_lo = t_hi;
     }
-    memcpy(r->g, g_end, sizeof r->g);
-    return r->t >= r->t_stop ? IG_DOPRI5_STOP : IG_DOPRI5_STEPPED;
+    memcpy(r->g, g_end, event_bytes);
+    if (r->t >= r->t_stop) {
+        r->started = 0;
+        return IG_DOPRI5_STOP;
+    }
+    return IG_DOPRI5_STEPPED;
 }

@@ -10,10 +10,10 @@
  * keeps the side of each function and lets the machine decide in fmi2NewDiscreteStates;
  * a crossing the wrong way is a no-op event. Unwatched indicators read 1.
  *
- * Co-Simulation (FMU_CO_SIMULATION): CVODE inside (cvode_glue.c, SUNDIALS linked
- * statically), at the tolerance of fmi2SetupExperiment. The integrator steps on its own
- * across communication points (states there are interpolated), so the step size a master
- * chooses does not change the events.
+ * Co-Simulation (FMU_CO_SIMULATION): the phase machine runs in ig_run (run.c, SUNDIALS linked
+ * statically), the same driver as impactgen's engine, at the tolerance of
+ * fmi2SetupExperiment. The integrator steps on its own across communication points (states
+ * there are interpolated), so the step size a master chooses does not change the events.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -26,7 +26,7 @@
 #include "model_scene.h"
 #include "model_fmu.h"
 #ifdef FMU_CO_SIMULATION
-#include "cvode_glue.h"
+#include "solver.h"
 #endif
 
 #if !defined(FMU_MODEL_EXCHANGE) && !defined(FMU_CO_SIMULATION)
@@ -38,7 +38,8 @@ enum mode { INSTANTIATED, INITIALIZATION, EVENT, CONTINUOUS, STEPPING, TERMINATE
 #define USE_JACOBIAN (MODEL_HAS_JACOBIAN && IG_METHOD_USES_JACOBIAN(MODEL_SCENE_METHOD))
 #define FAR_FUTURE 1e30  /* the end of a run with no stop time */
 #define STOP_SLACK 1e-9  /* a last step may pass the stop time by this much (relative): rounding of t + h */
-#define STEP_CAPACITY 1  /* CVODE steps per call of the glue: one, to stop past a communication point */
+#define RUN_CAPACITY 8   /* samples and segment records per ig_run call of fmi2DoStep */
+#define MAX_SEGMENTS 100000  /* phase segments within one fmi2DoStep (chattering impacts beyond) */
 
 typedef struct {
     char *name;
@@ -55,11 +56,8 @@ typedef struct {
     int nominals_changed;
 #ifdef FMU_CO_SIMULATION
     ig_solver *solver;
-    int segment_active;          /* a CVODE segment is under way from t_int */
     double t_int;                /* where the integrator is (>= t) */
     double y_int[MODEL_NSTATE];
-    int root_pending;            /* the integrator stopped at an event beyond the last communication point */
-    int fired[MODEL_NEVENT];
 #endif
 } instance;
 
@@ -214,7 +212,6 @@ static void free_solver(instance *c)
 #ifdef FMU_CO_SIMULATION
     ig_solver_free(c->solver);
     c->solver = NULL;
-    c->segment_active = c->root_pending = 0;
 #else
     (void)c;
 #endif
@@ -472,6 +469,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueRefer
     return fail((instance *)comp, "%s", "directional derivatives are not provided");
 }
 
+#ifdef FMU_MODEL_EXCHANGE
+/* ---- Model Exchange ---- */
 /* What an event does: the machine decides, from the sides it kept, whether a watched event
  * crossed in its direction. Returns the machine's act bits (0: a no-op event). */
 static int handle_events(instance *c, const int *fired_by_integrator)
@@ -494,8 +493,6 @@ static int handle_events(instance *c, const int *fired_by_integrator)
     return act;
 }
 
-#ifdef FMU_MODEL_EXCHANGE
-/* ---- Model Exchange ---- */
 fmi2Status fmi2EnterEventMode(fmi2Component comp)
 {
     instance *c = (instance *)comp;
@@ -632,39 +629,16 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size
 #endif
 
 #ifdef FMU_CO_SIMULATION
-/* ---- Co-Simulation: CVODE steps on its own; communication points are interpolated ---- */
-static fmi2Status start_segment(instance *c)
+/* ---- Co-Simulation: ig_run steps on its own; communication points are interpolated ---- */
+/* Log the switches of the segments ig_run recorded. */
+static void log_switches(const instance *c, const ig_segment *segments, int n)
 {
-    int events[MODEL_NEVENT], directions[MODEL_NEVENT];
-    const int watched = model_machine_events(&c->m, events, directions);
-    if (USE_JACOBIAN) ig_solver_use_jacobian(c->solver, !model_machine_constrained(&c->m));
-    const double t_stop = c->stop_time + STOP_SLACK * fmax(1.0, fabs(c->stop_time));
-    if (ig_segment_start(c->solver, &c->p, c->t_int, c->y_int, t_stop, events, directions, watched) < 0) {
-        c->mode = FAILED;
-        return fail(c, "CVODE could not start a segment: %s", ig_solver_message(c->solver));
+    for (int k = 0; k < n; ++k) {
+        if (segments[k].act) {
+            say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", segments[k].t,
+                model_machine_state_name(segments[k].state), model_machine_state_name(segments[k].next_state));
+        }
     }
-    c->segment_active = 1;
-    return fmi2OK;
-}
-
-/* The event the integrator stopped at: the machine's switch, new tolerances, a new segment. */
-static void at_root(instance *c)
-{
-    const double t_keep = c->t;
-    double y_keep[MODEL_NSTATE];
-    memcpy(y_keep, c->y, sizeof y_keep);
-    c->t = c->t_int;
-    memcpy(c->y, c->y_int, sizeof c->y);
-    const int act = handle_events(c, c->fired);
-    if (act & MODEL_ACT_TOLERANCES) {
-        double atol[MODEL_NSTATE];
-        model_machine_atol(&c->m, &c->p, c->rtol, MODEL_SCENE_ATOL, atol);
-        ig_solver_set_atol(c->solver, atol);
-    }
-    c->t = t_keep;
-    memcpy(c->y, y_keep, sizeof y_keep);
-    c->root_pending = 0;
-    c->segment_active = 0;
 }
 
 fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
@@ -676,28 +650,31 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
         return fail(c, "%s", "fmi2DoStep: the step must start where the last one ended, with h >= 0");
     }
     const double target = t + h;
-    double t_buf[STEP_CAPACITY], y_buf[STEP_CAPACITY * MODEL_NSTATE];
-    for (;;) {
-        if (c->root_pending && c->t_int <= target) at_root(c);
-        if (c->root_pending || c->t_int >= target) break;  /* the integrator is past the target */
-        if (!c->segment_active && c->t_int >= c->stop_time + STOP_SLACK * fmax(1.0, fabs(c->stop_time))) {
-            return fail(c, "%s", "fmi2DoStep: the step goes beyond the stop time of fmi2SetupExperiment");
-        }
-        if (!c->segment_active && start_segment(c) != fmi2OK) return fmi2Error;
-        int n = 0;
-        const int flag = ig_segment_advance(c->solver, t_buf, y_buf, NULL, STEP_CAPACITY, &n, c->fired);
-        if (flag < 0) {
-            c->mode = FAILED;
-            say(c, fmi2Error, "logStatusError", "CVODE failed in phase %s near t = %g: %s",
-                model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
-            return fmi2Error;
-        }
-        if (n > 0) {
-            c->t_int = t_buf[n - 1];
-            memcpy(c->y_int, y_buf + (size_t)(n - 1) * MODEL_NSTATE, sizeof c->y_int);
-        }
-        if (flag == IG_ROOT) c->root_pending = 1;
-        else if (flag == IG_REACHED_END) c->segment_active = 0;
+    const double t_stop = c->stop_time + STOP_SLACK * fmax(1.0, fabs(c->stop_time));
+    if (c->t_int >= t_stop && target > c->t_int) {
+        return fail(c, "%s", "fmi2DoStep: the step goes beyond the stop time of fmi2SetupExperiment");
+    }
+    double t_buf[RUN_CAPACITY], y_buf[RUN_CAPACITY * MODEL_NSTATE], out_buf[RUN_CAPACITY * MODEL_NOUT];
+    ig_segment segments[RUN_CAPACITY];
+    int flag = IG_TARGET;
+    long begun = 0;
+    while (c->t_int <= target) {  /* (at target only to switch at a root left there) */
+        int n = 0, n_segments = 0;
+        flag = ig_run(c->solver, &c->m, &c->p, &c->t_int, c->y_int, t_stop, target, MODEL_SCENE_ATOL,
+                      MAX_SEGMENTS - begun, 0, t_buf, y_buf, out_buf, NULL, RUN_CAPACITY, &n, segments,
+                      RUN_CAPACITY, &n_segments, NULL);
+        begun += n_segments;
+        log_switches(c, segments, n_segments);
+        if (flag != IG_BUFFER_FULL && flag != IG_SEGMENTS_FULL) break;
+    }
+    if (flag < 0) {
+        c->mode = FAILED;
+        say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
+            model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
+        return fmi2Error;
+    }
+    if (c->t_int < target) {  /* the run ended before the communication point */
+        return fail(c, "%s", "fmi2DoStep: the step goes beyond the stop time of fmi2SetupExperiment");
     }
     if (c->t_int == target || h == 0.0) {
         if (c->t_int == target) memcpy(c->y, c->y_int, sizeof c->y);

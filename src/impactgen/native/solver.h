@@ -1,18 +1,21 @@
 /*
- * cvode_glue.h: integrate one phase segment of a generated model with SUNDIALS CVODE.
+ * solver.h: the runtime of a generated model, written once for every model: it includes the
+ * generated "model.h" and "model_machine.h".
  *
- * Written once for every model: it includes the generated "model.h" and calls model_rhs
- * and model_events. ig_segment_start sets up one phase segment (its force law via
- * params->phase, its active events and their directions), and ig_segment_advance steps until
- * a root, the stop time or a full sample buffer: the loop an embedder with its own phase
- * logic writes. ig_run is the whole loop of the generated phase machine in one call, from
- * segment to segment: what impactgen's Python wrapper and the C driver call.
+ * ig_solver integrates one phase segment at a time with one of the steppers of stepper.h
+ * (solver.c): ig_segment_start sets up a segment (its force law via params->phase, its
+ * active events and their directions), and ig_segment_advance steps until a root, the stop
+ * time or a full sample buffer: the loop an embedder with its own phase logic writes.
+ * ig_run (run.c) is the whole loop of the generated phase machine, from segment to segment,
+ * resumable: what impactgen's Python engine, the C driver and the FMU's Co-Simulation call.
+ * The tallies of a run's summaries are in tally.h.
  */
-#ifndef IMPACTGEN_CVODE_GLUE_H
-#define IMPACTGEN_CVODE_GLUE_H
+#ifndef IMPACTGEN_SOLVER_H
+#define IMPACTGEN_SOLVER_H
 
 #include "model.h"
 #include "model_machine.h"
+#include "stepper.h"
 #include "tally.h"
 
 /* cdef-begin: the declarations below are read by cffi as they stand. */
@@ -20,37 +23,24 @@
 #define IG_REACHED_END 0     /* t_stop reached */
 #define IG_ROOT 1            /* an active event fired: see roots_found */
 #define IG_BUFFER_FULL 2     /* the sample buffers are full: call again to continue */
-#define IG_ERR_SOLVER -1     /* CVODE failed: ig_solver_message says why */
+#define IG_ERR_SOLVER -1     /* the integrator failed: ig_solver_message says why */
 #define IG_ERR_TOO_MUCH_WORK -2  /* more than max_steps steps in this segment */
 #define IG_ERR_USAGE -3      /* bad arguments (a bug in the caller) */
 #define IG_RUN_DONE 3        /* ig_run: the phase machine ended the run (separation) */
 #define IG_SEGMENTS_FULL 4   /* ig_run: the segment records are full: call again to continue */
 #define IG_ERR_STICK -4      /* ig_run: a stuck tip needed more than mu F: a slip event was missed */
 #define IG_ERR_SEGMENTS -5   /* ig_run: more segments than allowed (chattering impacts?) */
-/* Methods of ig_solver_new: CVODE's BDF and Adams, ARKODE's explicit Runge-Kutta pair, or
- * the same pair written out in C for a 6- to 60-state model (dopri5.c). */
+#define IG_TARGET 5          /* ig_run: the step that reached t_target is taken (ig_interpolate there) */
+/* Methods of ig_solver_new (callers name them: Python reads IG_METHOD_<NAME> from the
+ * library): CVODE's BDF and Adams, ARKODE's explicit Runge-Kutta pair, or the same pair
+ * written out in plain C (dopri5.c). */
 #define IG_METHOD_BDF 0
 #define IG_METHOD_ADAMS 1
 #define IG_METHOD_ERK 2
 #define IG_METHOD_DOPRI5 3  /* Dormand and Prince's 5(4) pair in plain C (dopri5.c), without SUNDIALS */
 #define IG_METHOD_AUTO 4    /* each segment begins with the plain-C pair, and goes on with CVODE's BDF
                                from where the pair finds it stiff */
-/* CVODE's default maximum orders: dense output keeps max order + 1 coefficients a sample. */
-#define IG_BDF_MAX_ORDER 5
-#define IG_ADAMS_MAX_ORDER 12
-
 typedef struct ig_solver ig_solver;
-
-typedef struct {
-    long nsteps;     /* internal steps */
-    long nfev;       /* right-hand side calls */
-    long njev;       /* Jacobian evaluations */
-    long nlinsetups; /* linear solver setups */
-    long netfails;   /* error test failures */
-    long nnlsfails;  /* nonlinear convergence failures */
-    long ngev;       /* root function calls */
-    long nstiff;     /* method auto: segments the explicit pair handed to BDF (stiff, or too long) */
-} ig_stats;
 
 /* method: IG_METHOD_BDF, IG_METHOD_ADAMS (CVODE), IG_METHOD_ERK (ARKODE ERKStep, Dormand and
  * Prince's 5(4) pair, for non-stiff problems), IG_METHOD_DOPRI5 (the same pair in plain C) or
@@ -122,23 +112,30 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
                  double rtol, double atol, long max_steps, double *atol_now,
                  double *t_buf, double *y_buf, double *out_buf, ig_tally *tally);
 
-/* Run the phase machine m (begun with ig_run_begin) under p from (*t, y) to
- * t_stop: each segment integrated until one of the events the machine watches, the switch
- * there, the next segment, with the tolerances the machine asks for (atol: the scene's
- * absolute tolerance; the relative one is the solver's) and the analytic Jacobian only
- * where no constraint force acts. *t and y follow the run. Samples, with their outputs
- * under the segment's parameters: every step when every_step is 1 (dense_buf, if not NULL,
- * as ig_segment_advance), else only each segment's end (no dense output). Returns
- * IG_RUN_DONE when the machine ends the run, IG_REACHED_END at t_stop, IG_BUFFER_FULL or
- * IG_SEGMENTS_FULL when the buffers hold capacity samples or segment_capacity segments are
- * written (call again with emptied buffers to continue), or < 0 on a failure
- * (ig_solver_message says why; the samples up to it are written). *n_written: the samples
- * already in the buffers on entry (1 after ig_run_begin wrote the start; 0 in emptied
- * buffers), written after, and less than capacity (IG_ERR_USAGE otherwise); on return,
- * the samples in them (segments[k].sample indexes them). At most max_segments segments
- * begin in one call.
+/* Advance the phase machine m (begun with ig_run_begin) under p from (*t, y) until
+ * t_target, a buffer fills, or the run ends (at t_stop, or where the machine ends it): each
+ * segment integrated until one of the events the machine watches, the switch there, the next
+ * segment, with the tolerances the machine asks for (atol: the scene's absolute tolerance;
+ * the relative one is the solver's) and the analytic Jacobian only where no constraint force
+ * acts. The integrator's stop time is t_stop; t_target only ends the call: the step that
+ * reaches it is taken whole (the integrator is not stopped there, so where a caller asks to
+ * be woken does not change the steps), and ig_interpolate gives the state at t_target within
+ * it. *t and y follow the run (the integrator's time and state, *t >= t_target on
+ * IG_TARGET). A root beyond t_target in that step is left pending: the machine switches
+ * there at the next call, so its state and p are those of t_target on return.
+ * Samples, with their outputs under the segment's parameters: every step when every_step is
+ * 1 (dense_buf, if not NULL, as ig_segment_advance), else only each segment's end (no dense
+ * output). Returns IG_RUN_DONE when the machine ends the run, IG_REACHED_END at t_stop,
+ * IG_TARGET past t_target, IG_BUFFER_FULL or IG_SEGMENTS_FULL when the buffers hold capacity
+ * samples or segment_capacity segments are written (call again with emptied buffers to
+ * continue), or < 0 on a failure (ig_solver_message says why; the samples up to it are
+ * written): IG_ERR_STICK when a stuck tip needed more than mu F (a slip event was missed).
+ * *n_written: the samples already in the buffers on entry (1 after ig_run_begin wrote the
+ * start; 0 in emptied buffers), written after, and less than capacity (IG_ERR_USAGE
+ * otherwise); on return, the samples in them (segments[k].sample indexes them). At most
+ * max_segments segments begin in one call.
  * tally, if not NULL (begun with ig_tally_begin), follows the run for ig_summarize. */
-int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
+int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop, double t_target,
            double atol, long max_segments, int every_step,
            double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
            ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally);
@@ -150,4 +147,4 @@ int ig_sundials_version_major(void);
 /* Whether a method uses a Jacobian (the explicit pairs do not; Python: scene.EXPLICIT_METHODS). */
 #define IG_METHOD_USES_JACOBIAN(method) ((method) != IG_METHOD_ERK && (method) != IG_METHOD_DOPRI5)
 
-#endif /* IMPACTGEN_CVODE_GLUE_H */
+#endif /* IMPACTGEN_SOLVER_H */

@@ -1,0 +1,152 @@
+/*
+ * run.c: the generated phase machine's run, segment after segment (ig_run_begin, ig_run in
+ * solver.h): the one driver of the machine, for the Python engine, the C driver and the
+ * FMU's Co-Simulation step.
+ */
+#include <string.h>
+
+#include "solver_state.h"
+
+/* Begin the machine's next segment at (t, y): its events, its Jacobian, its tolerances. */
+static int begin_segment(ig_solver *s, const model_machine *m, const model_params *p, double t,
+                         const double *y, double t_stop)
+{
+    int events[MODEL_NEVENT], directions[MODEL_NEVENT];
+    const int watched = model_machine_events(m, events, directions);
+    if (s->analytic && ig_solver_use_jacobian(s, !model_machine_constrained(m)) != 0) return IG_ERR_SOLVER;
+    return ig_segment_start(s, p, t, y, t_stop, events, directions, watched);
+}
+
+/* Write the step just taken, ending at (t, y), as the next sample with its outputs. */
+static int write_sample(ig_solver *s, const model_params *p, double t, const double *y, double *t_buf,
+                        double *y_buf, double *out_buf, double *dense_buf, int *n_written)
+{
+    const int k = *n_written;
+    if (ig_solver_write_sample(s, t, y, k, t_buf, y_buf, dense_buf) != 0) return IG_ERR_SOLVER;
+    model_outputs(t, y, out_buf + (size_t)k * MODEL_NOUT, p);
+    (*n_written)++;
+    return 0;
+}
+
+/* ig_run's loop over the segments (solver.h); ig_run then notes its last sample in the
+ * tally, whichever way the loop returned. */
+static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
+                       double t_target, double atol, long max_segments, int every_step, double *t_buf,
+                       double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
+                       ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally)
+{
+    int roots_found[MODEL_NEVENT];
+    double atol_now[MODEL_NSTATE];
+    long begun = 0;
+    *n_segments = 0;
+    if (capacity < 1 || segment_capacity < 1 || *n_written < 0 || *n_written >= capacity) {
+        ig_solver_say(s, "ig_run: the buffers must have room for a sample and a segment (*n_written: "
+                         "the samples already in them, 0 for emptied buffers)");
+        return IG_ERR_USAGE;
+    }
+    if (!s->root_pending && *t >= t_target) return IG_TARGET;
+    for (;;) {
+        int flag;
+        if (s->root_pending) {  /* the last call's last step ended at a root beyond its t_target */
+            s->root_pending = 0;
+            memcpy(roots_found, s->pending_roots, sizeof roots_found);
+            flag = IG_ROOT;
+            if (write_sample(s, p, *t, y, t_buf, y_buf, out_buf, every_step ? dense_buf : NULL, n_written) != 0) {
+                return IG_ERR_SOLVER;
+            }
+        } else {
+            if (!s->active) {
+                if (*n_segments >= segment_capacity) return IG_SEGMENTS_FULL;
+                if (!every_step && *n_written >= capacity) return IG_BUFFER_FULL;
+                if (begun++ >= max_segments) {
+                    ig_solver_say(s, "too many phase switches");
+                    return IG_ERR_SEGMENTS;
+                }
+                const int started = begin_segment(s, m, p, *t, y, t_stop);
+                if (started < 0) return started;
+            }
+            do {
+                if (every_step && *n_written >= capacity) return IG_BUFFER_FULL;
+                flag = ig_solver_step(s, t, y, roots_found);
+                if (flag < 0) return flag;
+                model_machine_observe(m, p, *t, y);
+                if (flag == IG_ROOT && *t > t_target) {  /* switched at the next call, after t_target */
+                    memcpy(s->pending_roots, roots_found, sizeof roots_found);
+                    s->root_pending = 1;
+                    return IG_TARGET;
+                }
+                if (every_step || flag != IG_STEPPED) {
+                    if (write_sample(s, p, *t, y, t_buf, y_buf, out_buf, every_step ? dense_buf : NULL,
+                                     n_written) != 0) {
+                        return IG_ERR_SOLVER;
+                    }
+                }
+                if (flag == IG_STEPPED && *t >= t_target) return IG_TARGET;
+            } while (flag == IG_STEPPED);
+        }
+        if (model_machine_stick_missed(m, p)) {
+            ig_solver_say(s, "the stuck tip needed a friction force beyond mu F and no slip event "
+                             "fired; tighten solver.rtol");
+            return IG_ERR_STICK;
+        }
+        ig_segment *seg = &segments[(*n_segments)++];
+        seg->t = *t;
+        seg->sample = *n_written - 1;
+        seg->state = m->state;
+        seg->slip = m->slip;
+        seg->params = *p;
+        seg->event = -1;
+        seg->act = 0;
+        if (flag == IG_ROOT) {
+            for (int k = 0; k < s->nevents && seg->event < 0; ++k) {
+                if (roots_found[k]) seg->event = s->events[k];
+            }
+            seg->act = model_machine_switch(m, p, *t, y, roots_found);
+        }
+        seg->next_state = m->state;  /* the machine after the switch (as it was, at t_stop) */
+        seg->next_slip = m->slip;
+        seg->delta_max = m->delta_max;
+        seg->P_max = m->P_max;
+        seg->delta_r = m->delta_r;
+        seg->R_res = m->R_res;
+        if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
+        if (flag == IG_REACHED_END) return IG_REACHED_END;
+        const int act = seg->act;
+        if (act & MODEL_ACT_END) return IG_RUN_DONE;
+        if (act & MODEL_ACT_TOLERANCES) {
+            model_machine_atol(m, p, s->rtol, atol, atol_now);
+            if (ig_solver_set_atol(s, atol_now) != 0) return IG_ERR_USAGE;
+        }
+        if (*t >= t_target) return IG_TARGET;
+    }
+}
+
+int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, const double *y0, int run_to_time,
+                 double rtol, double atol, long max_steps, double *atol_now,
+                 double *t_buf, double *y_buf, double *out_buf, ig_tally *tally)
+{
+    memcpy(y_buf, y0, sizeof(double) * MODEL_NSTATE);
+    t_buf[0] = t0;
+    const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
+    model_outputs(t0, y_buf, out_buf, p);
+    ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
+    if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
+    model_machine_atol(m, p, rtol, atol, atol_now);
+    const int flag = ig_solver_reset(s, rtol, atol_now, max_steps);
+    return flag != 0 ? flag : start;
+}
+
+int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop, double t_target,
+           double atol, long max_segments, int every_step,
+           double *t_buf, double *y_buf, double *out_buf, double *dense_buf, int capacity, int *n_written,
+           ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally)
+{
+    const int flag = run_machine(s, m, p, t, y, t_stop, t_target, atol, max_segments, every_step, t_buf, y_buf,
+                                 out_buf, dense_buf, capacity, n_written, segments, segment_capacity, n_segments,
+                                 tally);
+    if (tally && *n_written > 0) {
+        const long k = *n_written - 1;
+        ig_read_point(&tally->last, t_buf[k], y_buf + (size_t)k * MODEL_NSTATE, out_buf + (size_t)k * MODEL_NOUT);
+    }
+    return flag;
+}
