@@ -630,13 +630,26 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size
 
 #ifdef FMU_CO_SIMULATION
 /* ---- Co-Simulation: ig_run steps on its own; communication points are interpolated ---- */
-/* Log the switches of the segments ig_run recorded. */
+/* The stick-slip label of a contact state under exact Coulomb friction (as impactgen's results). */
+static const char *slip_label(int state, double slip)
+{
+    if (state == MODEL_MACHINE_FREE) return "";
+    return slip > 0.0 ? "slip+" : (slip < 0.0 ? "slip-" : "stick");
+}
+
+/* Log the switches of the segments ig_run recorded: "t = ...: from -> to" for a change of
+ * contact phase, and for a stick-slip change (its labels). */
 static void log_switches(const instance *c, const ig_segment *segments, int n)
 {
     for (int k = 0; k < n; ++k) {
-        if (segments[k].act) {
-            say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", segments[k].t,
-                model_machine_state_name(segments[k].state), model_machine_state_name(segments[k].next_state));
+        const ig_segment *seg = &segments[k];
+        if (seg->next_state != seg->state) {
+            say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", seg->t, model_machine_state_name(seg->state),
+                model_machine_state_name(seg->next_state));
+        }
+        if (seg->act & MODEL_ACT_SLIP) {
+            say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", seg->t, slip_label(seg->state, seg->slip),
+                slip_label(seg->next_state, seg->next_slip));
         }
     }
 }
