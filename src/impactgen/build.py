@@ -43,7 +43,8 @@ SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,und
                  "-fno-sanitize-recover=undefined")
 # the runtime written once for every model: the solver over its steppers, the run loop, the tallies
 GLUE_FILES = ("solver.h", "solver_state.h", "solver.c", "run.c", "tally.h", "tally.c", "stepper.h",
-              "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c", "step_pair.c", "step_auto.c",
+              "stepper.c", "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c", "step_pair.c",
+              "step_auto.c",
               "dopri5.h", "dopri5.c", "small_kernels.h", "small_kernels.c")
 CDEF_HEADERS = ("stepper.h", "tally.h", "solver.h")  # the runtime's declarations cffi reads, in this order
 MANIFEST = "manifest.json"

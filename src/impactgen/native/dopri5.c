@@ -102,9 +102,9 @@ int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn,
 {
     memset(r, 0, sizeof *r);
     if (n < 1 || max_events < 0 || !rhs_fn || (max_events > 0 && !events)) return -1;
-    const size_t vectors = IG_DOPRI5_STAGES + 5 + 6;  /* k, cont, atol, y, y1, y6, tmp, ymid */
-    const size_t event_arrays = 8;                      /* g, side, g_end, g_lo, g_hi, g_now, t_root, directions */
-    double *memory = (double *)malloc(sizeof(double) * (vectors * (size_t)n + event_arrays * (size_t)(max_events + 1)));
+    const size_t n_vectors = IG_DOPRI5_STAGES + 5 + 6;  /* k, cont, atol, y, y1, y6, tmp, ymid */
+    const size_t n_event_arrays = 8;                      /* g, side, g_end, g_lo, g_hi, g_now, t_root, directions */
+    double *memory = (double *)malloc(sizeof(double) * (n_vectors * (size_t)n + n_event_arrays * (size_t)(max_events + 1)));
     if (!memory) return -1;
     r->memory = memory;
     r->n = n;
@@ -113,22 +113,13 @@ int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn,
     r->events = events;
     r->user = user;
     double *next = memory;
+    double **vectors[] = {&r->atol, &r->y, &r->y1, &r->y6, &r->tmp, &r->ymid};
+    double **event_arrays[] = {&r->g, &r->side, &r->g_end, &r->g_lo, &r->g_hi, &r->g_now, &r->t_root};
     for (int s = 0; s < IG_DOPRI5_STAGES; ++s, next += n) r->k[s] = next;
     for (int s = 0; s < 5; ++s, next += n) r->cont[s] = next;
-    r->atol = next; next += n;
-    r->y = next; next += n;
-    r->y1 = next; next += n;
-    r->y6 = next; next += n;
-    r->tmp = next; next += n;
-    r->ymid = next; next += n;
+    for (size_t v = 0; v < sizeof vectors / sizeof *vectors; ++v, next += n) *vectors[v] = next;
     const int m = max_events + 1;  /* never an empty array */
-    r->g = next; next += m;
-    r->side = next; next += m;
-    r->g_end = next; next += m;
-    r->g_lo = next; next += m;
-    r->g_hi = next; next += m;
-    r->g_now = next; next += m;
-    r->t_root = next; next += m;
+    for (size_t v = 0; v < sizeof event_arrays / sizeof *event_arrays; ++v, next += m) *event_arrays[v] = next;
     r->directions = (int *)next;  /* m ints fit in m doubles */
     return 0;
 }

@@ -173,15 +173,8 @@ static int dense(ig_stepper *st, double t, double *rows, int terms)
 static void counters(const ig_stepper *st, ig_stats *stats)
 {
     const cvode_stepper *c = (const cvode_stepper *)st;
-    ig_stats all = c->done;
-    add_live(c, &all);
-    stats->nsteps += all.nsteps;
-    stats->nfev += all.nfev;
-    stats->njev += all.njev;
-    stats->nlinsetups += all.nlinsetups;
-    stats->netfails += all.netfails;
-    stats->nnlsfails += all.nnlsfails;
-    stats->ngev += all.ngev;
+    ig_stats_add(stats, &c->done);
+    add_live(c, stats);
 }
 
 static void free_cvode(ig_stepper *st)

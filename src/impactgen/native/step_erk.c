@@ -62,12 +62,6 @@ static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_
     return 0;
 }
 
-static int use_jacobian(ig_stepper *st, int analytic)
-{
-    (void)st;
-    return analytic ? -1 : 0;
-}
-
 static void restart(ig_stepper *st)
 {
     erk_stepper *e = (erk_stepper *)st;
@@ -134,12 +128,8 @@ static int dense(ig_stepper *st, double t, double *rows, int terms)
 static void counters(const ig_stepper *st, ig_stats *stats)
 {
     const erk_stepper *e = (const erk_stepper *)st;
-    ig_stats all = e->done;
-    add_live(e, &all);
-    stats->nsteps += all.nsteps;
-    stats->nfev += all.nfev;
-    stats->netfails += all.netfails;
-    stats->ngev += all.ngev;
+    ig_stats_add(stats, &e->done);
+    add_live(e, stats);
 }
 
 static void free_erk(ig_stepper *st)
@@ -154,7 +144,7 @@ static void free_erk(ig_stepper *st)
     free(e);
 }
 
-static const ig_stepper_ops erk_ops = {tolerances, use_jacobian, restart, start, step, interpolate, dense,
+static const ig_stepper_ops erk_ops = {tolerances, ig_stepper_no_jacobian, restart, start, step, interpolate, dense,
                                        counters, free_erk};
 
 ig_stepper *ig_erk_new(const ig_problem *problem, char *err, int errlen)

@@ -2,7 +2,6 @@
  * step_pair.c: the plain-C Dormand-Prince pair (dopri5.c) as a stepper (stepper.h).
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,14 +19,6 @@ typedef struct {
     ig_stats done;    /* counters of finished segments */
 } pair_stepper;
 
-void ig_stepper_say(const ig_problem *problem, const char *fmt, ...)
-{
-    va_list args;
-    va_start(args, fmt);
-    vsnprintf(problem->message, (size_t)problem->message_size, fmt, args);
-    va_end(args);
-}
-
 static void add_live(const pair_stepper *p, ig_stats *st)
 {
     if (p->live_counted) return;
@@ -44,12 +35,6 @@ static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_
     p->rtol = rtol;
     memcpy(p->atol, atol, sizeof(double) * (size_t)st->problem->n);
     return 0;
-}
-
-static int use_jacobian(ig_stepper *st, int analytic)
-{
-    (void)st;
-    return analytic ? -1 : 0;
 }
 
 static void restart(ig_stepper *st)
@@ -117,10 +102,7 @@ static int dense(ig_stepper *st, double t, double *rows, int terms)
 static void counters(const ig_stepper *st, ig_stats *stats)
 {
     const pair_stepper *p = (const pair_stepper *)st;
-    stats->nsteps += p->done.nsteps;
-    stats->nfev += p->done.nfev;
-    stats->netfails += p->done.netfails;
-    stats->ngev += p->done.ngev;
+    ig_stats_add(stats, &p->done);
     add_live(p, stats);
 }
 
@@ -133,7 +115,7 @@ static void free_pair(ig_stepper *st)
     free(p);
 }
 
-static const ig_stepper_ops pair_ops = {tolerances, use_jacobian, restart, start, step, interpolate, dense,
+static const ig_stepper_ops pair_ops = {tolerances, ig_stepper_no_jacobian, restart, start, step, interpolate, dense,
                                         counters, free_pair};
 
 ig_stepper *ig_pair_new(const ig_problem *problem, char *err, int errlen)

@@ -2,7 +2,8 @@
  * stepper.h: what the run loop asks of an integrator, as one small table of functions, with
  * one implementation per file: CVODE's BDF and Adams (step_cvode.c), ARKODE's explicit
  * Runge-Kutta pair (step_erk.c), the plain-C Dormand-Prince pair (step_pair.c over
- * dopri5.c), and "auto", a stepper made of two others (step_auto.c).
+ * dopri5.c), and "auto", a stepper made of two others (step_auto.c); what they share is in
+ * stepper.c.
  *
  * A stepper knows no model: it integrates y' = f(t, y) of n equations and watches the event
  * functions it is given (ig_problem), from a start to a stop time or the first root. The
@@ -101,7 +102,10 @@ int ig_pair_stiff(const ig_stepper *st);
 long ig_pair_steps(const ig_stepper *st);
 void ig_pair_forget_step(ig_stepper *st);
 
-/* Write a message into problem->message (printf-like). */
+/* Shared by the steppers (stepper.c): write a message into problem->message (printf-like);
+ * add counters; the use_jacobian of an explicit method (difference quotients only: 0). */
 void ig_stepper_say(const ig_problem *problem, const char *fmt, ...);
+void ig_stats_add(ig_stats *to, const ig_stats *from);
+int ig_stepper_no_jacobian(ig_stepper *st, int analytic);
 
 #endif /* IMPACTGEN_STEPPER_H */
