@@ -1,6 +1,6 @@
 """The CVODE integrator of a run, reused across runs of a warm process (stage 7, with phases.py).
 
-`CvodeSession` owns one `ig_solver` from the C glue (cvode_glue.c) and runs the generated
+`CvodeSession` owns one `ig_solver` of the C runtime (native/solver.h) and runs the generated
 phase machine on it in C (ig_run), segment after segment, until the machine ends the run,
 the end time or a failure; it hands back the samples (every step, or only each segment's
 end), the segments' records and, for dense output, each step's interpolating polynomial. `likely_cause` turns a CVODE
@@ -42,7 +42,7 @@ class Machine:
 
 
 class Segment(NamedTuple):
-    """One phase segment of a run, as ig_run recorded it (see cvode_glue.h's ig_segment)."""
+    """One phase segment of a run, as ig_run recorded it (see tally.h's ig_segment)."""
 
     t: float  # its end
     sample: int  # index of its last sample in the run's samples (the start is sample 0)

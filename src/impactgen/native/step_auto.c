@@ -116,10 +116,13 @@ static const ig_stepper_ops auto_ops = {tolerances, use_jacobian, restart, start
 
 ig_stepper *ig_auto_new(ig_stepper *first, ig_stepper *second, char *err, int errlen)
 {
-    auto_stepper *a = (auto_stepper *)calloc(1, sizeof *a);
-    if (a) a->dirs = (int *)calloc((size_t)(first ? first->problem->max_events : 0) + 1, sizeof(int));
-    if (!a || !a->dirs || !first || !second) {
-        snprintf(err, (size_t)errlen, "allocating the explicit pair failed");
+    auto_stepper *a = NULL;
+    if (first && second) {  /* (a failed constructor wrote its message into err) */
+        a = (auto_stepper *)calloc(1, sizeof *a);
+        if (a) a->dirs = (int *)calloc((size_t)first->problem->max_events + 1, sizeof(int));
+        if (!a || !a->dirs) snprintf(err, (size_t)errlen, "out of memory");
+    }
+    if (!a || !a->dirs) {
         if (first) first->ops->free(first);
         if (second) second->ops->free(second);
         if (a) free(a->dirs);
