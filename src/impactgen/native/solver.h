@@ -54,7 +54,7 @@ void ig_solver_free(ig_solver *s);
 
 /* Make a used solver ready for a new simulation with the same method: new tolerances and
  * step limit, the counters cleared, the analytic Jacobian (if it was created with one) back
- * in use. Saves creating and freeing CVODE's memory for every run of a warm process.
+ * in use. Saves creating and freeing the integrator's memory for every run of a warm process.
  * Returns 0, or IG_ERR_USAGE for a bad argument (the solver is then unchanged). */
 int ig_solver_reset(ig_solver *s, double rtol, const double *atol, long max_steps);
 
@@ -79,12 +79,12 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
  * point) is written as t_buf[k], y_buf[k * MODEL_NSTATE ...]. roots_found (nevents ints)
  * flags the events that fired on IG_ROOT. dense_buf, if not NULL, receives per sample
  * ig_dense_terms(s) rows of MODEL_NSTATE Taylor coefficients c_j = y^(j)(t_k) / j! of
- * CVODE's interpolating polynomial of that step: y(t) = sum_j c_j (t - t_k)^j holds for
+ * the method's interpolating polynomial of that step: y(t) = sum_j c_j (t - t_k)^j holds for
  * t_(k-1) <= t <= t_k (dense output, as solve_ivp's dense_output). */
 int ig_segment_advance(ig_solver *s, double *t_buf, double *y_buf, double *dense_buf,
                        int capacity, int *n_written, int *roots_found);
 
-/* The state at time t within the last step taken (CVODE's interpolating polynomial): for a
+/* The state at time t within the last step taken (the method's interpolating polynomial): for a
  * caller that must report the state at times the integrator stepped over (co-simulation
  * communication points). Returns 0, or IG_ERR_USAGE when t lies outside the last step. */
 int ig_interpolate(ig_solver *s, double t, double *y);
