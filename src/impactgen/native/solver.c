@@ -259,7 +259,7 @@ int ig_dense_terms(const ig_solver *s)
 void ig_solver_stats(const ig_solver *s, ig_stats *stats)
 {
     memset(stats, 0, sizeof *stats);
-    s->st->ops->counters(s->st, stats);
+    ig_stepper_counters(s->st, stats);
 }
 
 const char *ig_solver_message(const ig_solver *s)

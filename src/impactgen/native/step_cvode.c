@@ -36,8 +36,7 @@ typedef struct {
     int tolerances_changed;
     double t_stop;        /* the segment's end (CVODE's stop time, and its tout) */
     int *dirs;            /* max_events root directions */
-    int live;             /* CVODE's counters belong to a segment of this run: add them */
-    ig_stats done;        /* counters of finished segments */
+    int counting;         /* CVODE's counters belong to a segment of this run: add them */
 } cvode_stepper;
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
@@ -69,17 +68,18 @@ static int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *u
     return 0;
 }
 
-static void add_live(const cvode_stepper *c, ig_stats *st)
+static void live(const ig_stepper *st, ig_stats *stats)
 {
+    const cvode_stepper *c = (const cvode_stepper *)st;
     long v;
-    if (!c->live) return;
-    if (CVodeGetNumSteps(c->cvode, &v) == CV_SUCCESS) st->nsteps += v;
-    if (CVodeGetNumRhsEvals(c->cvode, &v) == CV_SUCCESS) st->nfev += v;
-    if (CVodeGetNumJacEvals(c->cvode, &v) == CV_SUCCESS) st->njev += v;
-    if (CVodeGetNumLinSolvSetups(c->cvode, &v) == CV_SUCCESS) st->nlinsetups += v;
-    if (CVodeGetNumErrTestFails(c->cvode, &v) == CV_SUCCESS) st->netfails += v;
-    if (CVodeGetNumNonlinSolvConvFails(c->cvode, &v) == CV_SUCCESS) st->nnlsfails += v;
-    if (CVodeGetNumGEvals(c->cvode, &v) == CV_SUCCESS) st->ngev += v;
+    if (!c->counting) return;
+    if (CVodeGetNumSteps(c->cvode, &v) == CV_SUCCESS) stats->nsteps += v;
+    if (CVodeGetNumRhsEvals(c->cvode, &v) == CV_SUCCESS) stats->nfev += v;
+    if (CVodeGetNumJacEvals(c->cvode, &v) == CV_SUCCESS) stats->njev += v;
+    if (CVodeGetNumLinSolvSetups(c->cvode, &v) == CV_SUCCESS) stats->nlinsetups += v;
+    if (CVodeGetNumErrTestFails(c->cvode, &v) == CV_SUCCESS) stats->netfails += v;
+    if (CVodeGetNumNonlinSolvConvFails(c->cvode, &v) == CV_SUCCESS) stats->nnlsfails += v;
+    if (CVodeGetNumGEvals(c->cvode, &v) == CV_SUCCESS) stats->ngev += v;
 }
 
 static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_steps)
@@ -108,19 +108,19 @@ static int use_jacobian(ig_stepper *st, int analytic)
 static void restart(ig_stepper *st)
 {
     cvode_stepper *c = (cvode_stepper *)st;
-    memset(&c->done, 0, sizeof c->done);
-    c->live = 0;
+    memset(&st->done, 0, sizeof st->done);
+    c->counting = 0;
 }
 
 static int start(ig_stepper *st, double t0, const double *y0, double t_stop, const int *directions, int nevents)
 {
     cvode_stepper *c = (cvode_stepper *)st;
-    add_live(c, &c->done);  /* CVodeReInit clears CVODE's counters */
-    c->live = 0;
+    ig_stepper_bank(st);  /* CVodeReInit clears CVODE's counters */
+    c->counting = 0;
     memcpy(N_VGetArrayPointer(c->y), y0, sizeof(double) * (size_t)st->problem->n);
     for (int k = 0; k < nevents; ++k) c->dirs[k] = directions[k];
     if (CVodeReInit(c->cvode, t0, c->y) != CV_SUCCESS) return -1;
-    c->live = 1;
+    c->counting = 1;
     if (c->tolerances_changed) {
         if (CVodeSVtolerances(c->cvode, c->rtol, c->abstol) != CV_SUCCESS) return -1;
         c->tolerances_changed = 0;
@@ -170,13 +170,6 @@ static int dense(ig_stepper *st, double t, double *rows, int terms)
     return ig_sundials_taylor(st->problem->n, CVodeGetDky, c->cvode, c->dky, order, t, rows, terms);
 }
 
-static void counters(const ig_stepper *st, ig_stats *stats)
-{
-    const cvode_stepper *c = (const cvode_stepper *)st;
-    ig_stats_add(stats, &c->done);
-    add_live(c, stats);
-}
-
 static void free_cvode(ig_stepper *st)
 {
     cvode_stepper *c = (cvode_stepper *)st;
@@ -193,7 +186,7 @@ static void free_cvode(ig_stepper *st)
 }
 
 static const ig_stepper_ops cvode_ops = {tolerances, use_jacobian, restart, start, step, interpolate, dense,
-                                         counters, free_cvode};
+                                         live, free_cvode};
 
 ig_stepper *ig_cvode_new(const ig_problem *problem, int adams, char *err, int errlen)
 {

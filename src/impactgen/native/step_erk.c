@@ -25,8 +25,7 @@ typedef struct {
     int tolerances_changed;
     double t_stop;
     int *dirs;
-    ig_stats done;  /* counters of finished segments */
-    int live;       /* ARKODE's counters belong to a segment of this run: add them */
+    int counting;   /* ARKODE's counters belong to a segment of this run: add them */
 } erk_stepper;
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
@@ -42,14 +41,15 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *user_data)
     return 0;
 }
 
-static void add_live(const erk_stepper *e, ig_stats *st)
+static void live(const ig_stepper *st, ig_stats *stats)
 {
+    const erk_stepper *e = (const erk_stepper *)st;
     long v;
-    if (!e->live) return;
-    if (ERKStepGetNumSteps(e->erk, &v) == ARK_SUCCESS) st->nsteps += v;
-    if (ERKStepGetNumRhsEvals(e->erk, &v) == ARK_SUCCESS) st->nfev += v;
-    if (ERKStepGetNumErrTestFails(e->erk, &v) == ARK_SUCCESS) st->netfails += v;
-    if (ERKStepGetNumGEvals(e->erk, &v) == ARK_SUCCESS) st->ngev += v;
+    if (!e->counting) return;
+    if (ERKStepGetNumSteps(e->erk, &v) == ARK_SUCCESS) stats->nsteps += v;
+    if (ERKStepGetNumRhsEvals(e->erk, &v) == ARK_SUCCESS) stats->nfev += v;
+    if (ERKStepGetNumErrTestFails(e->erk, &v) == ARK_SUCCESS) stats->netfails += v;
+    if (ERKStepGetNumGEvals(e->erk, &v) == ARK_SUCCESS) stats->ngev += v;
 }
 
 static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_steps)
@@ -65,19 +65,19 @@ static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_
 static void restart(ig_stepper *st)
 {
     erk_stepper *e = (erk_stepper *)st;
-    memset(&e->done, 0, sizeof e->done);
-    e->live = 0;
+    memset(&st->done, 0, sizeof st->done);
+    e->counting = 0;
 }
 
 static int start(ig_stepper *st, double t0, const double *y0, double t_stop, const int *directions, int nevents)
 {
     erk_stepper *e = (erk_stepper *)st;
-    add_live(e, &e->done);  /* ERKStepReInit clears ARKODE's counters */
-    e->live = 0;
+    ig_stepper_bank(st);  /* ERKStepReInit clears ARKODE's counters */
+    e->counting = 0;
     memcpy(N_VGetArrayPointer(e->y), y0, sizeof(double) * (size_t)st->problem->n);
     for (int k = 0; k < nevents; ++k) e->dirs[k] = directions[k];
     if (ERKStepReInit(e->erk, rhs, t0, e->y) != ARK_SUCCESS) return -1;
-    e->live = 1;
+    e->counting = 1;
     if (e->tolerances_changed) {
         if (ERKStepSVtolerances(e->erk, e->rtol, e->abstol) != ARK_SUCCESS) return -1;
         e->tolerances_changed = 0;
@@ -125,13 +125,6 @@ static int dense(ig_stepper *st, double t, double *rows, int terms)
     return ig_sundials_taylor(st->problem->n, ERKStepGetDky, e->erk, e->dky, ERK_DENSE_DEGREE, t, rows, terms);
 }
 
-static void counters(const ig_stepper *st, ig_stats *stats)
-{
-    const erk_stepper *e = (const erk_stepper *)st;
-    ig_stats_add(stats, &e->done);
-    add_live(e, stats);
-}
-
 static void free_erk(ig_stepper *st)
 {
     erk_stepper *e = (erk_stepper *)st;
@@ -145,7 +138,7 @@ static void free_erk(ig_stepper *st)
 }
 
 static const ig_stepper_ops erk_ops = {tolerances, ig_stepper_no_jacobian, restart, start, step, interpolate, dense,
-                                       counters, free_erk};
+                                       live, free_erk};
 
 ig_stepper *ig_erk_new(const ig_problem *problem, char *err, int errlen)
 {

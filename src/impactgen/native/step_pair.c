@@ -16,16 +16,16 @@ typedef struct {
     double *atol;
     int continued;    /* a segment of this run has begun: the next may start from its last step */
     int live_counted; /* the pair's counters belong to a run already restarted: do not add them */
-    ig_stats done;    /* counters of finished segments */
 } pair_stepper;
 
-static void add_live(const pair_stepper *p, ig_stats *st)
+static void live(const ig_stepper *st, ig_stats *stats)
 {
+    const pair_stepper *p = (const pair_stepper *)st;
     if (p->live_counted) return;
-    st->nsteps += p->r.nsteps;
-    st->nfev += p->r.nfev;
-    st->netfails += p->r.netfails;
-    st->ngev += p->r.ngev;
+    stats->nsteps += p->r.nsteps;
+    stats->nfev += p->r.nfev;
+    stats->netfails += p->r.netfails;
+    stats->ngev += p->r.ngev;
 }
 
 static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_steps)
@@ -40,7 +40,7 @@ static int tolerances(ig_stepper *st, double rtol, const double *atol, long max_
 static void restart(ig_stepper *st)
 {
     pair_stepper *p = (pair_stepper *)st;
-    memset(&p->done, 0, sizeof p->done);
+    memset(&st->done, 0, sizeof st->done);
     p->live_counted = 1;
     p->continued = 0;
 }
@@ -48,7 +48,7 @@ static void restart(ig_stepper *st)
 static int start(ig_stepper *st, double t0, const double *y0, double t_stop, const int *directions, int nevents)
 {
     pair_stepper *p = (pair_stepper *)st;
-    add_live(p, &p->done);
+    ig_stepper_bank(st);
     p->live_counted = 0;
     /* the step the pair proposed at the end of the segment before in this run */
     const double hint = p->continued ? p->r.h : 0.0;
@@ -99,13 +99,6 @@ static int dense(ig_stepper *st, double t, double *rows, int terms)
     return 0;
 }
 
-static void counters(const ig_stepper *st, ig_stats *stats)
-{
-    const pair_stepper *p = (const pair_stepper *)st;
-    ig_stats_add(stats, &p->done);
-    add_live(p, stats);
-}
-
 static void free_pair(ig_stepper *st)
 {
     pair_stepper *p = (pair_stepper *)st;
@@ -116,7 +109,7 @@ static void free_pair(ig_stepper *st)
 }
 
 static const ig_stepper_ops pair_ops = {tolerances, ig_stepper_no_jacobian, restart, start, step, interpolate, dense,
-                                        counters, free_pair};
+                                        live, free_pair};
 
 ig_stepper *ig_pair_new(const ig_problem *problem, char *err, int errlen)
 {

@@ -14,7 +14,7 @@ void ig_stepper_say(const ig_problem *problem, const char *fmt, ...)
     va_end(args);
 }
 
-void ig_stats_add(ig_stats *to, const ig_stats *from)
+static void add(ig_stats *to, const ig_stats *from)
 {
     to->nsteps += from->nsteps;
     to->nfev += from->nfev;
@@ -24,6 +24,17 @@ void ig_stats_add(ig_stats *to, const ig_stats *from)
     to->nnlsfails += from->nnlsfails;
     to->ngev += from->ngev;
     to->nstiff += from->nstiff;
+}
+
+void ig_stepper_counters(const ig_stepper *st, ig_stats *stats)
+{
+    add(stats, &st->done);
+    st->ops->live(st, stats);
+}
+
+void ig_stepper_bank(ig_stepper *st)
+{
+    st->ops->live(st, &st->done);
 }
 
 int ig_stepper_no_jacobian(ig_stepper *st, int analytic)

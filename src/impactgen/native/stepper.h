@@ -75,8 +75,8 @@ typedef struct {
     /* The last step's polynomial as Taylor coefficients at t, its end: rows[j * n + i] =
      * y_i^(j)(t) / j!, terms rows (those past the method's order are 0). Returns 0 or -1. */
     int (*dense)(ig_stepper *st, double t, double *rows, int terms);
-    /* Add the counters since the last restart to *stats. */
-    void (*counters)(const ig_stepper *st, ig_stats *stats);
+    /* Add the counters of the segment under way (not yet in done) to *stats. */
+    void (*live)(const ig_stepper *st, ig_stats *stats);
     void (*free)(ig_stepper *st);
 } ig_stepper_ops;
 
@@ -85,6 +85,7 @@ struct ig_stepper {
     const ig_stepper_ops *ops;
     const ig_problem *problem;
     int dense_terms; /* Taylor coefficients per step of dense output: the method's max order + 1 */
+    ig_stats done;   /* counters of the segments finished since the last restart */
 };
 
 /* The steppers; NULL on failure with a message in err (errlen bytes). */
@@ -102,10 +103,14 @@ int ig_pair_stiff(const ig_stepper *st);
 long ig_pair_steps(const ig_stepper *st);
 void ig_pair_forget_step(ig_stepper *st);
 
+/* The counters since the last restart, added to *stats (done and the live segment's). */
+void ig_stepper_counters(const ig_stepper *st, ig_stats *stats);
+
 /* Shared by the steppers (stepper.c): write a message into problem->message (printf-like);
- * add counters; the use_jacobian of an explicit method (difference quotients only: 0). */
+ * move the live segment's counters into done (before a start re-initialises them); the
+ * use_jacobian of an explicit method (difference quotients only: 0). */
 void ig_stepper_say(const ig_problem *problem, const char *fmt, ...);
-void ig_stats_add(ig_stats *to, const ig_stats *from);
+void ig_stepper_bank(ig_stepper *st);
 int ig_stepper_no_jacobian(ig_stepper *st, int analytic);
 
 #endif /* IMPACTGEN_STEPPER_H */
