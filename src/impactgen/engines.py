@@ -16,7 +16,7 @@ from .codegen.spec import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import Scene
+from .scene import Scene, scene_with
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -124,8 +124,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         overrides = {SOLVER_OPTIONS[k]: v for k, v in given.items() if v is not None}
         if method is not None and engine == "c":
             overrides["solver.method"] = _c_method(method)
-        if overrides:
-            scene = scene.replace(overrides)
+        if overrides:  # only the values given are checked: the rest of the scene was already
+            scene = scene_with(scene, overrides)
     times = _checked_times(t_eval, scene) if t_eval is not None else None
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
         for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):

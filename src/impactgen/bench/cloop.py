@@ -52,21 +52,29 @@ def _c_ms(driver: Path) -> float:
 
 
 _PYTHON_LOOP = """
-import sys, time
+import statistics, sys, time
 import impactgen
-scene = impactgen.load_scene(sys.argv[1]).replace({"solver.rtol": float(sys.argv[2])})
+base = impactgen.load_scene(sys.argv[1])
+rtol = float(sys.argv[2])
+scene = base.replace({"solver.rtol": rtol})
 warm, block, count = (int(a) for a in sys.argv[3:6])
 for _ in range(warm):
     impactgen.simulate(scene, record_steps=False).summary
+    impactgen.simulate(base, rtol=rtol, record_steps=False).summary
 print("ready", flush=True)
-for _ in sys.stdin:  # one timing per line asked for
-    blocks = []
+for _ in sys.stdin:  # one timing per line asked for: the scene with its rtol, and the option, in turn
+    inside, option = [], []
     for _ in range(count):
         started = time.perf_counter()
         for _ in range(block):
             impactgen.simulate(scene, record_steps=False).summary
-        blocks.append((time.perf_counter() - started) / block * 1e3)
-    print(sorted(blocks)[len(blocks) // 2], flush=True)
+        inside.append((time.perf_counter() - started) / block * 1e3)
+        started = time.perf_counter()
+        for _ in range(block):
+            impactgen.simulate(base, rtol=rtol, record_steps=False).summary
+        option.append((time.perf_counter() - started) / block * 1e3)
+    ratios = [b / a for a, b in zip(inside, option)]
+    print(statistics.median(inside), statistics.median(option), statistics.median(ratios), flush=True)
 """
 
 
@@ -86,11 +94,14 @@ class PythonLoop:
             self.close()
             raise RuntimeError("the Python API's timing process did not start")
 
-    def ms(self) -> float:
-        """One timing: the median of PY_BLOCKS blocks of PY_BLOCK calls, ms per call."""
+    def ms(self) -> tuple[float, float, float]:
+        """One timing: PY_BLOCKS blocks of PY_BLOCK calls of the scene with its rtol, each
+        followed by a block of the scene given the rtol as an option; the medians (ms per
+        call) of each and of the blocks' ratios (option / inside)."""
         self.process.stdin.write("\n")
         self.process.stdin.flush()
-        return float(self.process.stdout.readline())
+        inside, option, ratio = (float(v) for v in self.process.stdout.readline().split())
+        return inside, option, ratio
 
     def close(self) -> None:
         self.process.stdin.close()
@@ -106,19 +117,24 @@ class PythonLoop:
 def paired_timings(driver: Path, scene_name: str) -> dict:
     """ROUNDS pairs of a C timing and a Python timing back to back, the order swapped every
     round (a trend in the host's speed then favours neither); the ratio is the median of the
-    pairs' ratios, as the sweep-overhead target takes it."""
-    c, py = [], []
+    pairs' ratios, as the sweep-overhead target takes it. The Python timing also gives the
+    cost of `simulate(scene, rtol=...)` against the scene with that rtol inside it."""
+    c, py, option, option_ratios = [], [], [], []
     with PythonLoop(scene_name) as python:
         for k in range(ROUNDS):
             if k % 2:
-                py.append(python.ms())
+                timing = python.ms()
                 c.append(_c_ms(driver))
             else:
                 c.append(_c_ms(driver))
-                py.append(python.ms())
+                timing = python.ms()
+            py.append(timing[0])
+            option.append(timing[1])
+            option_ratios.append(timing[2])
     ratios = [p / q for p, q in zip(py, c)]
     return {"c_ms": statistics.median(c), "python_ms": statistics.median(py), "c_runs_ms": c, "python_runs_ms": py,
-            "pair_ratios": ratios, "ratio": statistics.median(ratios)}
+            "pair_ratios": ratios, "ratio": statistics.median(ratios), "option_ms": statistics.median(option),
+            "option_runs_ms": option, "option_ratios": option_ratios, "option_ratio": statistics.median(option_ratios)}
 
 
 def _instructions_per_step(driver: Path, folder: Path) -> dict:
