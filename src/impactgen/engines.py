@@ -5,13 +5,12 @@ option that will be refused), and the solver settings override the scene's own.
 """
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from . import phases
-from .build import CompiledModel, compile_model
+from .build import compile_model
 from .codegen.spec import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
@@ -27,28 +26,10 @@ OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "recor
 
 def model_spec(scene: Scene) -> ModelSpec:
     """The structure of the generated C that `scene` needs (numbers stay parameters)."""
-    return _spec(*_structure(scene))
-
-
-def _structure(scene: Scene) -> tuple:
-    """ModelSpec's fields for `scene`."""
     contact, solver = scene.contact, scene.solver
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
-    return scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained
-
-
-@lru_cache(maxsize=256)
-def _spec(*fields) -> ModelSpec:
-    """One ModelSpec per structure."""
-    return ModelSpec(*fields)
-
-
-@lru_cache(maxsize=256)
-def _model(*fields) -> CompiledModel:
-    """The compiled model of a structure: a warm run looks it up by the plain tuple of its
-    fields (the ModelSpec dataclass hashes in Python)."""
-    return compile_model(_spec(*fields))
+    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained)
 
 
 def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,
@@ -132,7 +113,7 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
                 raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
-        return phases.run(_model(*_structure(scene)), scene, t_eval=times, dense_output=bool(dense_output),
+        return phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output),
                           record_steps=bool(record_steps))
     from . import reference
     return reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import functools
 import math
 import re
 from collections import abc
@@ -360,7 +359,6 @@ def parse_override(text: str) -> tuple[str, Any]:
 INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 
-@functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys for every case
 def split_key(dotted: str) -> tuple[str, str, int | None]:
     """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
     raise SceneError for a key the schema does not have."""
@@ -398,16 +396,11 @@ def _checked_value(dotted: str, section: str, key: str, index: int | None, value
 
 
 def check_values(dotted: str, values: Iterable[Any], links: int) -> None:
-    """Every value for key `dotted` checked as `check_value` checks it. A finite float that
-    a number's own check takes passes without the coercion: a sweep checks every value it
-    will run (up to 1e6) before its first case, and the workers wait on that."""
+    """Every value for key `dotted` checked as `check_value` checks it (a sweep checks every
+    value it will run before its first case)."""
     section, key, index = split_key(dotted)
-    spec = SCHEMA[section][key]
-    number = index is not None or spec.kind == "float"  # a single number, not a list or a word
     for value in values:
-        if number and type(value) is float and math.isfinite(value) and not (spec.check and spec.check(value)):
-            continue
-        check_value(dotted, value, links)
+        _checked_value(dotted, section, key, index, value, links)
 
 
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
