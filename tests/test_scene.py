@@ -147,6 +147,34 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
             assert outcomes[0] == outcomes[1], overrides
 
 
+def test_solver_settings_give_the_scene_read_in_full():
+    """with_solver (how simulate applies its options) gives the very scene, or an error
+    naming the same key, that reading the whole scene with those settings gives."""
+    import random
+
+    from impactgen.errors import SceneError
+    from impactgen.scene import scene_from_dict, with_solver
+    rng = random.Random(11)
+    values = {"rtol": [1e-8, 1e-6, 0.0, "x"], "atol": [1e-10, 2.0], "max_steps": [5, 0, 1.5],
+              "t_end": ["separation", 0.5, -1.0], "method": ["bdf", "adams", "dopri5", "auto"],
+              "jacobian": ["auto", "analytic", "difference"]}
+    for name in ("paper", "chain3-free-flight", "bouncing"):
+        base = impactgen.load_scene(name)
+        for _ in range(200):
+            settings = {k: rng.choice(values[k]) for k in rng.sample(sorted(values), rng.randint(1, 3))}
+            outcomes = []
+            for build in (lambda: scene_from_dict(base.to_dict(), {f"solver.{k}": v for k, v in settings.items()}),
+                          lambda: with_solver(base, settings)):
+                try:
+                    outcomes.append(build())
+                except SceneError as exc:
+                    outcomes.append(exc.key)
+            if len([o for o in outcomes if isinstance(o, str)]) == 1:
+                raise AssertionError((settings, outcomes))
+            if not isinstance(outcomes[0], str) or len(settings) == 1:
+                assert outcomes[0] == outcomes[1], settings
+
+
 def test_checking_many_values_refuses_exactly_what_checking_each_refuses():
     """check_values (a sweep's check of every value before it runs) passes plain floats by a
     shortcut; it must refuse the same values, with the same message, as check_value."""

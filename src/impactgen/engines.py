@@ -15,12 +15,11 @@ from .codegen.spec import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import Scene, scene_with
+from .scene import Scene, with_solver
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
-SOLVER_OPTIONS = {"rtol": "solver.rtol", "atol": "solver.atol", "max_steps": "solver.max_steps",
-                  "t_end": "solver.t_end"}
+SOLVER_OPTIONS = ("rtol", "atol", "max_steps", "t_end")  # simulate()'s keys of the scene's [solver]
 OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "record_steps")
 
 
@@ -102,11 +101,11 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
     if rtol is not None or atol is not None or max_steps is not None or t_end is not None or method is not None:
         given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
-        overrides = {SOLVER_OPTIONS[k]: v for k, v in given.items() if v is not None}
+        settings = {k: v for k, v in given.items() if v is not None}
         if method is not None and engine == "c":
-            overrides["solver.method"] = _c_method(method)
-        if overrides:  # only the values given are checked: the rest of the scene was already
-            scene = scene_with(scene, overrides)
+            settings["method"] = _c_method(method)
+        if settings:  # only the values given are checked: the rest of the scene was already
+            scene = with_solver(scene, settings)
     times = _checked_times(t_eval, scene) if t_eval is not None else None
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
         for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):

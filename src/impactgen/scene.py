@@ -599,6 +599,21 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     return scene
 
 
+def with_solver(base: Scene, settings: Mapping[str, Any]) -> Scene:
+    """`base` with some keys of its [solver] table changed (``{"rtol": 1e-8}``): each value
+    checked as the scene checks it, the Jacobian's "auto" resolved again; nothing else of
+    the scene is read, since no other key depends on the solver's."""
+    checked = {key: _checked_value(f"solver.{key}", "solver", key, None, value, base.n)
+               for key, value in settings.items()}
+    if "jacobian" in checked:  # the setting as given: `jacobian` is the resolved one
+        checked["jacobian_setting"] = checked.pop("jacobian")
+    solver = _with(base.solver, checked)
+    jacobian = _jacobian(solver.method, solver.jacobian_setting, base.n)
+    if jacobian != solver.jacobian:
+        solver = _with(solver, {"jacobian": jacobian})
+    return _with(base, {"solver": solver})
+
+
 _SECTION_FIELDS = {"chain", "rod", "surface", "contact", "solver"}  # sections that are a Scene field of their name
 
 
