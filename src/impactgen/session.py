@@ -106,8 +106,6 @@ def summary_layout(ffi) -> SummaryLayout:
                          struct.Struct("=" + record_layout(ffi, "ig_summary", others)))
 
 
-
-
 class MachineRun(NamedTuple):
     """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
     ig_run's last return code with the message of a failure, and the time the run stopped."""
@@ -122,8 +120,6 @@ class MachineRun(NamedTuple):
     message: str
     t_last: float
     summaries: TallyRecords  # over the whole run, over its first impact (ig_summarize)
-
-
 
 
 class CvodeSession:
