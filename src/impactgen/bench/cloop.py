@@ -61,24 +61,28 @@ rtol = float(sys.argv[2])
 scene = base.replace({"solver.rtol": rtol})
 warm, block, count = (int(a) for a in sys.argv[3:6])
 OPTION_WARM = 20
+TURN = 20  # calls of one form before the other's: about a millisecond, shorter than the host's swings
 for _ in range(OPTION_WARM):  # the same count in every process: callgrind's difference cancels it
     impactgen.simulate(base, rtol=rtol, record_steps=False).summary
 for _ in range(warm):
     impactgen.simulate(scene, record_steps=False).summary
 print("ready", flush=True)
 clock = time.perf_counter
-for _ in sys.stdin:  # one timing per line asked for: the scene with its rtol, and the option, call by call in turn
+turn = min(TURN, block)
+for _ in sys.stdin:  # one timing per line asked for: the scene with its rtol, and the option, in short turns
     inside, option = [], []
     for _ in range(count):
         a = b = 0.0
-        for _ in range(block):
+        for _ in range(block // turn):
             started = clock()
-            impactgen.simulate(scene, record_steps=False).summary
+            for _ in range(turn):
+                impactgen.simulate(scene, record_steps=False).summary
             middle = clock()
-            impactgen.simulate(base, rtol=rtol, record_steps=False).summary
+            for _ in range(turn):
+                impactgen.simulate(base, rtol=rtol, record_steps=False).summary
             a, b = a + middle - started, b + clock() - middle
-        inside.append(a / block * 1e3)
-        option.append(b / block * 1e3)
+        inside.append(a / (block // turn * turn) * 1e3)
+        option.append(b / (block // turn * turn) * 1e3)
     ratios = [b / a for a, b in zip(inside, option)]
     print(statistics.median(inside), statistics.median(option), statistics.median(ratios), flush=True)
 """
@@ -101,10 +105,11 @@ class PythonLoop:
             raise RuntimeError("the Python API's timing process did not start")
 
     def ms(self) -> tuple[float, float, float]:
-        """One timing: PY_BLOCKS blocks of PY_BLOCK calls of the scene with its rtol, each
-        call followed by one of the scene given the rtol as an option (so that the host's
-        speed, which moves within milliseconds, moves both alike); the medians (ms per call)
-        of each and of the blocks' ratios (option / inside)."""
+        """One timing: PY_BLOCKS blocks of PY_BLOCK calls of the scene with its rtol, in turns
+        of 20 calls with as many of the scene given the rtol as an option (a turn lasts about
+        a millisecond, so the host's speed moves both forms alike, and each form runs on
+        warm caches of its own); the medians (ms per call) of each and of the blocks' ratios
+        (option / inside)."""
         self.process.stdin.write("\n")
         self.process.stdin.flush()
         inside, option, ratio = (float(v) for v in self.process.stdout.readline().split())

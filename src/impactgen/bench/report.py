@@ -335,7 +335,7 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
                          f"{c_loop['c_ms']:.3f} and {c_loop['python_ms']:.3f} ms "
                          f"({c_loop['python_ms'] / c_loop['c_ms']:.2f}x).")
             if "option_ratios" in c_loop:
-                lines += ["", "Each Python timing alternates its calls, one by one, with calls of "
+                lines += ["", "Each Python timing alternates its calls, 20 at a time, with as many of "
                               "`impactgen.simulate(base, rtol=rtol, record_steps=False).summary` on the scene without "
                               f"the rtol: {', '.join(f'{v:.3f}' for v in c_loop['option_runs_ms'])} ms; each round's "
                               "ratio to the scene with the rtol inside it (the median of its blocks' ratios) "
