@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any, Callable
 
 INF = math.inf
@@ -33,17 +32,17 @@ class Parameter:
     kind: str  # "input" | "derived" | "machine"
     needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "used"
     per_link: bool = False
-    read: str | None = None  # the value as a Python expression of the scene s ({i}: the link index from 0)
+    read: Callable[[Any], Any] | None = None  # the value from a scene (a per-link row: the tuple of the links')
     low: float = -INF  # physical range of an input, for the C check (fmi2SetReal)
     high: float = INF
     low_open: bool = False  # the range excludes `low`
     high_open: bool = False
     fmi_type: str = "Real"  # "Real" | "Boolean"
 
-    def source(self, link: int) -> str:
-        """The expression that reads this row's value (for `link`, from 0) from a scene `s`."""
+    def value(self, scene: Any, link: int = 0) -> float:
+        """This row's value (for `link`, from 0) in `scene`."""
         assert self.read is not None, f"{self.name} is not set by a scene"
-        return self.read.format(i=link)
+        return self.read(scene)[link] if self.per_link else self.read(scene)
 
     def names(self, links: int) -> list[tuple[str, str, int]]:
         """(C name, scene key, link index) of each field the row stands for."""
@@ -74,35 +73,35 @@ POISSON = {"low": -1.0, "high": 0.5, "low_open": True, "high_open": True}
 
 PARAMETERS: tuple[Parameter, ...] = (
     Parameter("L", "chain.length[{i}]", "m", "length of link {i}", "input", per_link=True,
-              read="s.chain.length[{i}]", **POSITIVE),
+              read=lambda s: s.chain.length, **POSITIVE),
     Parameter("m", "chain.mass[{i}]", "kg", "mass of link {i}", "input", per_link=True,
-              read="s.chain.mass[{i}]", **POSITIVE),
-    Parameter("g", "chain.gravity", "m/s2", "gravity", "input", read="s.chain.gravity", low=0.0),
+              read=lambda s: s.chain.mass, **POSITIVE),
+    Parameter("g", "chain.gravity", "m/s2", "gravity", "input", read=lambda s: s.chain.gravity, low=0.0),
     Parameter("E_rod", "rod.E", "Pa", "Young's modulus of the rod", "input",
-              read="s.rod.E", **POSITIVE),
+              read=lambda s: s.rod.E, **POSITIVE),
     Parameter("nu_rod", "rod.nu", "1", "Poisson ratio of the rod", "input",
-              read="s.rod.nu", **POISSON),
+              read=lambda s: s.rod.nu, **POISSON),
     Parameter("S_y_rod", "rod.yield_strength", "Pa", "yield strength of the rod", "input",
-              read="s.rod.yield_strength", **POSITIVE),
+              read=lambda s: s.rod.yield_strength, **POSITIVE),
     Parameter("R_tip", "rod.tip_radius", "m", "radius of the rod's spherical tip", "input",
-              read="s.tip_radius", **POSITIVE),
+              read=lambda s: s.tip_radius, **POSITIVE),
     Parameter("E_surface", "surface.E", "Pa", "Young's modulus of the surface", "input",
-              read="s.surface.E", **POSITIVE),
+              read=lambda s: s.surface.E, **POSITIVE),
     Parameter("nu_surface", "surface.nu", "1", "Poisson ratio of the surface", "input",
-              read="s.surface.nu", **POISSON),
+              read=lambda s: s.surface.nu, **POISSON),
     Parameter("S_y_surface", "surface.yield_strength", "Pa", "yield strength of the surface", "input",
-              read="s.surface.yield_strength", **POSITIVE),
+              read=lambda s: s.surface.yield_strength, **POSITIVE),
     Parameter("surface_height", "surface.height", "m",
               "height of the undeformed surface (ignored when surface.height_initial is set)", "input",
-              read="0.0 if s.surface_height is None else s.surface_height"),
+              read=lambda s: 0.0 if s.surface_height is None else s.surface_height),
     Parameter("surface_initial", "surface.height_initial", "",
               "1: the surface is at the tip's initial height (surface.height = \"initial\")", "input",
-              read="1.0 if s.surface_height is None else 0.0", low=0.0, high=1.0,
+              read=lambda s: 1.0 if s.surface_height is None else 0.0, low=0.0, high=1.0,
               fmi_type="Boolean"),
     Parameter("mu", "contact.friction", "1", "friction coefficient", "input", needs="friction",
-              read="s.contact.friction", low=0.0),
+              read=lambda s: s.contact.friction, low=0.0),
     Parameter("eps", "contact.friction_eps", "m/s", "regularization speed of the friction sign", "input",
-              needs="regularized", read="s.contact.friction_eps", **POSITIVE),
+              needs="regularized", read=lambda s: s.contact.friction_eps, **POSITIVE),
     Parameter("E_star", "", "Pa", "reduced modulus E* (Eq. 7)", "derived", needs="used"),
     Parameter("R", "", "m", "reduced tip radius (Eq. 8)", "derived", needs="used"),
     Parameter("C_j", "", "1", "critical yield coefficient", "derived", needs="used"),
@@ -150,21 +149,9 @@ class Field:
         text = self.row.doc.format(i=self.link + 1)
         return f"{text}, {self.row.unit}" if self.row.unit not in ("", "1") else text
 
-    @property
-    def source(self) -> str:
-        """The expression that reads the field's value from a scene `s`."""
-        return self.row.source(self.link)
-
     def read(self, scene: Any) -> float:
-        return float(scene_reader((self.source,))(scene)[0])
-
-
-@lru_cache(maxsize=256)
-def scene_reader(sources: tuple[str, ...]) -> Callable[[Any], tuple]:
-    """One function that reads these expressions (Field.source) from a scene at once: what
-    fills a parameter struct for every simulation, where a call per field costs a tenth of
-    a microsecond each. The expressions are the table's own."""
-    return eval(f"lambda s: ({''.join(f'({source}), ' for source in sources)})", {})
+        """The field's value in `scene`."""
+        return float(self.row.value(scene, self.link))
 
 
 def fields(links: int, friction_law: str, used: set[str]) -> tuple[Field, ...]:

@@ -77,8 +77,8 @@ def test_a_result_pickles_with_its_summary_and_warnings():
     sampled = impactgen.simulate(hard, t_eval=[0.0, 1e-4, 2e-4])
     again = pickle.loads(pickle.dumps(sampled))
     assert again.phases == sampled.phases and again.stats == sampled.stats
-    assert list(again.phase) == list(sampled.phase) and list(again.trajectory.phase_labels()) == list(
-        sampled.trajectory.phase_labels())
+    assert list(again.phase) == list(sampled.phase) and list(again.trajectory.phase) == list(
+        sampled.trajectory.phase)
     assert [i.to_dict() for i in again.impacts] == [i.to_dict() for i in sampled.impacts]
     assert math.isfinite(again.impacts[0].T_before) and again.stats["segments"] == len(again.phases)
 

@@ -117,8 +117,7 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
     import random
 
     from impactgen.errors import SceneError
-    from impactgen.scene import Scene, scene_from_dict, scene_with
-    assert not hasattr(Scene, "__post_init__")  # scene_with makes scenes without Scene.__init__
+    from impactgen.scene import scene_from_dict, scene_with
     rng = random.Random(7)
     values = {
         "initial.u[2]": lambda: rng.uniform(-1, 1), "initial.q_deg[2]": lambda: rng.uniform(-90, 0),
@@ -129,7 +128,9 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
         "rod.yield_strength": lambda: rng.choice([1e9, 3e11]), "rod.nu": lambda: rng.choice([0.3, 0.6]),
         "surface.height": lambda: rng.choice(["initial", -1.8, 0.0]), "solver.rtol": lambda: rng.choice([1e-8, "x"]),
         "solver.t_end": lambda: rng.choice(["separation", 0.5]), "contact.friction_mode": lambda: rng.choice(
-            ["coulomb", "bad"]), "chain.links": lambda: rng.choice([2, 3]), "solver.method": lambda: "adams",
+            ["coulomb", "bad"]), "chain.links": lambda: rng.choice([2, 3]),
+        "solver.method": lambda: rng.choice(["adams", "bdf", "dopri5", "x"]),
+        "solver.jacobian": lambda: rng.choice(["auto", "analytic", "difference", "x"]),
         "rod.tip_radius": lambda: rng.uniform(1e-4, 1e-2), "initial.u[3]": lambda: 0.1, "name": lambda: "x y",
         "rod.E": lambda: rng.choice([2e11, 5e8]), "surface.E": lambda: rng.choice([2e11, 5e8]),
         "surface.yield_strength": lambda: rng.choice([1e9, 3e11])}
@@ -144,6 +145,34 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
                 except SceneError as exc:
                     outcomes.append(str(exc))
             assert outcomes[0] == outcomes[1], overrides
+
+
+def test_solver_settings_give_the_scene_read_in_full():
+    """with_solver (how simulate applies its options) gives the very scene, or an error
+    naming the same key, that reading the whole scene with those settings gives."""
+    import random
+
+    from impactgen.errors import SceneError
+    from impactgen.scene import scene_from_dict, with_solver
+    rng = random.Random(11)
+    values = {"rtol": [1e-8, 1e-6, 0.0, "x"], "atol": [1e-10, 2.0], "max_steps": [5, 0, 1.5],
+              "t_end": ["separation", 0.5, -1.0], "method": ["bdf", "adams", "dopri5", "auto"],
+              "jacobian": ["auto", "analytic", "difference"]}
+    for name in ("paper", "chain3-free-flight", "bouncing"):
+        base = impactgen.load_scene(name)
+        for _ in range(200):
+            settings = {k: rng.choice(values[k]) for k in rng.sample(sorted(values), rng.randint(1, 3))}
+            outcomes = []
+            for build in (lambda: scene_from_dict(base.to_dict(), {f"solver.{k}": v for k, v in settings.items()}),
+                          lambda: with_solver(base, settings)):
+                try:
+                    outcomes.append(build())
+                except SceneError as exc:
+                    outcomes.append(exc.key)
+            if len([o for o in outcomes if isinstance(o, str)]) == 1:
+                raise AssertionError((settings, outcomes))
+            if not isinstance(outcomes[0], str) or len(settings) == 1:
+                assert outcomes[0] == outcomes[1], settings
 
 
 def test_checking_many_values_refuses_exactly_what_checking_each_refuses():

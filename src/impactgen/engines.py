@@ -5,50 +5,30 @@ option that will be refused), and the solver settings override the scene's own.
 """
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from . import phases
-from .build import CompiledModel, compile_model
+from .build import compile_model
 from .codegen.spec import ModelSpec
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import Scene
+from .scene import Scene, with_solver
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
-SOLVER_OPTIONS = {"rtol": "solver.rtol", "atol": "solver.atol", "max_steps": "solver.max_steps",
-                  "t_end": "solver.t_end"}
+SOLVER_OPTIONS = ("rtol", "atol", "max_steps", "t_end")  # simulate()'s keys of the scene's [solver]
 OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "record_steps")
 
 
 def model_spec(scene: Scene) -> ModelSpec:
     """The structure of the generated C that `scene` needs (numbers stay parameters)."""
-    return _spec(*_structure(scene))
-
-
-def _structure(scene: Scene) -> tuple:
-    """ModelSpec's fields for `scene`."""
     contact, solver = scene.contact, scene.solver
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
-    return scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained
-
-
-@lru_cache(maxsize=256)
-def _spec(*fields) -> ModelSpec:
-    """One ModelSpec per structure."""
-    return ModelSpec(*fields)
-
-
-@lru_cache(maxsize=256)
-def _model(*fields) -> CompiledModel:
-    """The compiled model of a structure: a warm run looks it up by the plain tuple of its
-    fields (the ModelSpec dataclass hashes in Python)."""
-    return compile_model(_spec(*fields))
+    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained)
 
 
 def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,
@@ -121,18 +101,18 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
     if rtol is not None or atol is not None or max_steps is not None or t_end is not None or method is not None:
         given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
-        overrides = {SOLVER_OPTIONS[k]: v for k, v in given.items() if v is not None}
+        settings = {k: v for k, v in given.items() if v is not None}
         if method is not None and engine == "c":
-            overrides["solver.method"] = _c_method(method)
-        if overrides:
-            scene = scene.replace(overrides)
+            settings["method"] = _c_method(method)
+        if settings:  # only the values given are checked: the rest of the scene was already
+            scene = with_solver(scene, settings)
     times = _checked_times(t_eval, scene) if t_eval is not None else None
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
         for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
                 raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
-        return phases.run(_model(*_structure(scene)), scene, t_eval=times, dense_output=bool(dense_output),
+        return phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output),
                           record_steps=bool(record_steps))
     from . import reference
     return reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))

@@ -21,13 +21,12 @@ from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Columns, Impact, PhaseSpan, SimulationResult, TallyRecords, Trajectory
+from .results import Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory
 from .scene import Scene
 from .session import CvodeSession, Machine, MachineRun, Segment
 from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
-_yield_scale = partial(tuple.__new__, YieldScale)  # YieldScale._make without its Python frame
 
 
 def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
@@ -73,7 +72,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         session.close()
     stats = partial(_stats, session.stats_names, counters, len(ran.segments), len(ran.t), time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
-    contact = _yield_scale((params.R, params.delta_c, params.B)) if model.spec.plastic else None  # as derived in C
+    contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
     spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries)
@@ -81,7 +80,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
 
 def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int]) -> Trajectory:
     """The samples of a run (made when first asked for: a summary needs none)."""
-    return Trajectory(ran.t, ran.y, partial(_phase_labels, ran.segments, len(ran.t), state0, state_end),
+    return Trajectory(ran.t, ran.y, _phase_labels(ran.segments, len(ran.t), state0, state_end),
                       Columns(output_index, ran.outputs))
 
 
@@ -190,6 +189,6 @@ def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first
                             {name: np.array([v]) for name, v in zip(model.output_names, first)})
     return SimulationResult(scene, "c", "no-impact",
                             f"the tip touches the surface but moves {motion} it (d(delta)/dt = "
-                            f"{rate0:.3g} m/s): no impact", trajectory, [], [],
-                            {"segments": 0, "samples": 1, "wall_s": time.perf_counter() - started},
+                            f"{rate0:.3g} m/s): no impact", Ready(trajectory), Ready([]), [],
+                            Ready({"segments": 0, "samples": 1, "wall_s": time.perf_counter() - started}),
                             tallied=tallied)

@@ -34,7 +34,7 @@ from scipy.integrate import solve_ivp
 
 from .dense import DenseSolution, TimeSampler
 from .errors import SceneError, SolverError
-from .results import Impact, PhaseSpan, SimulationResult, Trajectory
+from .results import Impact, PhaseSpan, Ready, SimulationResult, Trajectory
 from .scene import Scene
 
 METHODS = ("Radau", "BDF", "LSODA", "DOP853", "RK45")
@@ -436,8 +436,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
         rec.add(model, np.array([0.0]), y[None, :], "free")
         trajectory = Trajectory(rec.t[0], rec.y[0], rec.phase[0], rec.outputs[0])
         return SimulationResult(scene, engine, "no-impact", "the tip touches the surface but does not "
-                                f"approach it (d(delta)/dt = {rate0:.3g} m/s): no impact", trajectory,
-                                [], [], {"nsteps": 0, "nfev": 0, "njev": 0, "segments": 0, "samples": 1})
+                                f"approach it (d(delta)/dt = {rate0:.3g} m/s): no impact", Ready(trajectory),
+                                Ready([]), [], Ready({"nsteps": 0, "nfev": 0, "njev": 0, "segments": 0, "samples": 1}))
 
     rec = _Recorder()
     if phase == "elastic":
@@ -528,4 +528,5 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
                  method=method)
     sampled = Trajectory(*sampler.gathered(nstate, list(outputs))) if sampler else None
     sol = DenseSolution(breaks, pieces, nstate) if dense_output else None
-    return SimulationResult(scene, engine, status, message, trajectory, spans, impacts, stats, sampled, sol)
+    return SimulationResult(scene, engine, status, message, Ready(trajectory), Ready(spans), impacts, Ready(stats),
+                            sampled, sol)

@@ -9,15 +9,18 @@ engines fill the same types, so their results compare key by key.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from collections.abc import Callable, Mapping
-from typing import Any, NamedTuple
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, Generic, NamedTuple, TypeVar
 
 import numpy as np
 
 from .dense import DenseSolution
 from .scene import Scene
 from .validity import YieldScale, energy_warning, validity_warnings
+
+Part = TypeVar("Part")
 
 # The scalar outputs every model computes at each sample (T1..Tn, the kinetic energy per
 # link, come beside them), with their units.
@@ -81,9 +84,15 @@ def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
     return [{"t": t, "from": a, "to": b} for t, a, b in items]
 
 
-def _made(value: Any) -> Any:
-    """`value`, or what it makes when it is a maker (a result's parts made on first use)."""
-    return value() if callable(value) else value
+@dataclass(frozen=True)
+class Ready(Generic[Part]):
+    """The maker of a result's part that is made already (the reference engine makes its
+    parts as it runs; a pickled result carries them made)."""
+
+    value: Part
+
+    def __call__(self) -> Part:
+        return self.value
 
 
 IMPACT_UNITS = {"t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
@@ -97,19 +106,8 @@ class Trajectory:
 
     t: np.ndarray  # (N,)
     y: np.ndarray  # (N, nstate): q, u, then the works W_normal[, W_friction]; rows are samples
-    phase: "np.ndarray | Callable[[], np.ndarray]"  # (N,) phase name of the step that ended at each
-    # sample, or what makes them: few callers ask for an array of names per sample
+    phase: np.ndarray  # (N,) phase name of the step that ended at each sample
     outputs: Mapping[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
-
-    def phase_labels(self) -> np.ndarray:
-        """`phase` as an array (made once, on first use)."""
-        self.phase = _made(self.phase)
-        return self.phase
-
-    def __getstate__(self) -> dict[str, Any]:
-        """Pickled as plain data: the phase names made first (what makes them may hold C objects)."""
-        self.phase_labels()
-        return self.__dict__
 
 
 class Columns(Mapping):
@@ -196,7 +194,7 @@ class TallyRecords:
         if made is None:
             record = self._layout.record
             values = record.unpack_from(self._raw, k * record.size)
-            made = self._made[k] = tuple.__new__(Tallied, (*values[:_Y_FINAL], values[_Y_FINAL:]))
+            made = self._made[k] = Tallied(*values[:_Y_FINAL], values[_Y_FINAL:])
         return made
 
     def __len__(self) -> int:
@@ -204,23 +202,6 @@ class TallyRecords:
 
     def __reduce__(self):
         return tuple, ((self[0], self[1]),)
-
-
-class computed_once:
-    """functools.cached_property without the lock it takes on every first use before
-    Python 3.12: a summary is read once per run, in the inner loop of a sweep."""
-
-    def __init__(self, func):
-        self.func, self.__doc__ = func, func.__doc__
-
-    def __set_name__(self, owner, name: str) -> None:
-        self.name = name
-
-    def __get__(self, obj, objtype=None):
-        if obj is None:
-            return self
-        value = obj.__dict__[self.name] = self.func(obj)  # found there from now on
-        return value
 
 
 def _output(name: str, doc: str) -> property:
@@ -280,53 +261,54 @@ class SimulationResult:
     engine: str
     status: str
     message: str
-    steps: "Trajectory | Callable[[], Trajectory]"  # `trajectory`, or what makes it on first use
-    spans: "list[PhaseSpan] | Callable[[], list[PhaseSpan]]"  # `phases`, or what makes them on first use
+    # What makes `trajectory`, `phases` and `stats` when first asked for (a summary the C
+    # engine tallied, and the warnings, need none of them: a sweep never makes them).
+    make_trajectory: Callable[[], Trajectory]
+    make_phases: Callable[[], list[PhaseSpan]]
     impact_records: list[Impact]  # as the engine recorded them: their energies wait for `impacts`
-    counters: "dict[str, Any] | Callable[[], dict[str, Any]]"  # `stats`, or what makes them on first use
+    make_stats: Callable[[], dict[str, Any]]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
     tallied: "TallyRecords | tuple[Tallied, Tallied] | None" = None  # the C engine's summaries (run, first impact)
 
-    @computed_once
+    @cached_property
     def trajectory(self) -> Trajectory:
-        """The samples at every step (made on first use: a summary the engine tallied, and the
-        warnings, need none)."""
-        return _made(self.steps)
+        """The samples at every step."""
+        return self.make_trajectory()
 
-    @computed_once
+    @cached_property
     def phases(self) -> list[PhaseSpan]:
-        """The phase spans (made on first use: the summaries and warnings need none)."""
-        return _made(self.spans)
+        """The phase spans."""
+        return self.make_phases()
 
-    @computed_once
+    @cached_property
     def stats(self) -> dict[str, Any]:
-        """Integrator counters and the wall time (named on first use)."""
-        return _made(self.counters)
+        """Integrator counters and the wall time."""
+        return self.make_stats()
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickled as plain data: what is made on first use is made first (what makes it may
-        hold C objects)."""
+        """Pickled as plain data: the parts made first (what makes them may hold C objects)."""
         state = dict(self.__dict__)
-        state["steps"], state["spans"], state["counters"] = self.trajectory, self.phases, self.stats
+        state["make_trajectory"], state["make_phases"], state["make_stats"] = (
+            Ready(self.trajectory), Ready(self.phases), Ready(self.stats))
         return state
 
-    @computed_once
+    @cached_property
     def impacts(self) -> list[Impact]:
         """The impacts, their energies read from the samples on first use (the summaries and
         the warnings need none of them: a sweep never reads them)."""
         _fill_impact_energies(self.trajectory, self.n, self.impact_records)
         return self.impact_records
 
-    @computed_once
+    @cached_property
     def first_impact(self) -> dict[str, Any]:
         """The first impact (MODEL section 6), computed on first use and kept."""
         if self.tallied is not None:
             return _from_tally(self.tallied[1], self.n, self.impact_records)
         return _first_impact_summary(self)
 
-    @computed_once
+    @cached_property
     def summary(self) -> dict[str, Any]:
         """The run (for a run to separation, its first impact), computed on first use and kept."""
         if self._to_separation():
@@ -390,7 +372,7 @@ class SimulationResult:
 
     @property
     def phase(self) -> np.ndarray:
-        return self._shown.phase_labels()
+        return self._shown.phase
 
     @property
     def outputs(self) -> dict[str, np.ndarray]:
@@ -430,7 +412,7 @@ class SimulationResult:
         y = self.y
         return y[2 * self.n + 1] if y.shape[0] > 2 * self.n + 1 else np.zeros(y.shape[1])
 
-    @computed_once
+    @cached_property
     def warnings(self) -> list[str]:
         """Where this result leaves the model's range of validity, and an energy budget that
         does not close (see validity.py)."""

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import functools
 import math
 import re
 from collections import abc
@@ -119,8 +118,10 @@ class Scene:
             The checked scene. A change that leaves it inconsistent (three links with two
             initial angles, a tip inside the surface) raises `SceneError` naming the key.
         """
-        changed = dataclasses.replace(self, **fields) if fields else self
-        return scene_from_dict(changed.to_dict(), overrides, source=self.source)
+        if fields:  # whole fields: the scene they make is read in full
+            changed = dataclasses.replace(self, **fields)
+            return scene_from_dict(changed.to_dict(), overrides, source=self.source)
+        return scene_with(self, overrides or {})
 
     def to_dict(self) -> dict[str, Any]:
         """The scene as nested dicts of plain values, as a TOML file states it (angles in
@@ -358,7 +359,6 @@ def parse_override(text: str) -> tuple[str, Any]:
 INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 
-@functools.lru_cache(maxsize=1024)  # a sweep splits the same few keys for every case
 def split_key(dotted: str) -> tuple[str, str, int | None]:
     """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
     raise SceneError for a key the schema does not have."""
@@ -396,16 +396,11 @@ def _checked_value(dotted: str, section: str, key: str, index: int | None, value
 
 
 def check_values(dotted: str, values: Iterable[Any], links: int) -> None:
-    """Every value for key `dotted` checked as `check_value` checks it. A finite float that
-    a number's own check takes passes without the coercion: a sweep checks every value it
-    will run (up to 1e6) before its first case, and the workers wait on that."""
+    """Every value for key `dotted` checked as `check_value` checks it (a sweep checks every
+    value it will run before its first case)."""
     section, key, index = split_key(dotted)
-    spec = SCHEMA[section][key]
-    number = index is not None or spec.kind == "float"  # a single number, not a list or a word
     for value in values:
-        if number and type(value) is float and math.isfinite(value) and not (spec.check and spec.check(value)):
-            continue
-        check_value(dotted, value, links)
+        _checked_value(dotted, section, key, index, value, links)
 
 
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
@@ -508,10 +503,7 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
         raise SceneError("initial.q", "give exactly one of initial.q (rad) and initial.q_deg")
     q0 = q_rad if q_rad is not None else tuple(math.radians(a) for a in q_deg)
     method, jacobian_setting = get("solver", "method"), get("solver", "jacobian")
-    jacobian = jacobian_setting
-    if jacobian == "auto":
-        jacobian = "analytic" if method in ("bdf", "auto") and n <= JACOBIAN_AUTO_MAX_LINKS else "difference"
-    solver = Solver(method, jacobian, get("solver", "rtol"), get("solver", "atol"),
+    solver = Solver(method, _jacobian(method, jacobian_setting, n), get("solver", "rtol"), get("solver", "atol"),
                     get("solver", "t_end"), get("solver", "t_max"), get("solver", "max_steps"),
                     get("solver", "sustained_contact"), jacobian_setting)
     scene = Scene(name, chain, rod, get("rod", "tip_radius"), surface,
@@ -521,9 +513,16 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     return scene
 
 
-# Keys whose new value re-decides other fields (the links size every list; the method and
-# the jacobian setting resolve "auto" together): a case that changes one is read in full.
-_REREAD = {"chain.links", "solver.method", "solver.jacobian"}
+def _jacobian(method: str, setting: str, links: int) -> str:
+    """The Jacobian a solver uses: `setting`, its "auto" resolved by the method and the links."""
+    if setting != "auto":
+        return setting
+    return "analytic" if method in ("bdf", "auto") and links <= JACOBIAN_AUTO_MAX_LINKS else "difference"
+
+
+# The key whose new value re-decides other fields (the links size every list): a case that
+# changes it is read in full.
+_REREAD = {"chain.links"}
 _MATERIALS = {"E", "nu", "yield_strength"}  # the keys of a [rod] or [surface] Material
 # The keys `_check_physics` reads: a case that changes none of them (a speed, a friction
 # coefficient, a solver setting) keeps the base scene's verdict, which was already checked.
@@ -535,8 +534,8 @@ def scene_with(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     """`base` with some keys changed, checked as `scene_from_dict(base.to_dict(), overrides)`
     checks it and equal to what it builds, at a fraction of the cost: only the changed values
     are coerced (by `check_value`, the scene's own coercion), then the cross-key checks run.
-    A sweep builds every case this way. A refused case is read in full, so that its error is
-    the one `scene_from_dict` reports."""
+    A sweep builds every case this way, and `simulate` applies its options so. A refused
+    case is read in full, so that its error is the one `scene_from_dict` reports."""
     try:
         return _changed(base, overrides)
     except SceneError:
@@ -571,9 +570,11 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
                 target[:] = [convert(v) for v in checked]
             else:
                 target[index - 1] = convert(checked)
+        elif name == "solver.jacobian":  # the setting as given: `jacobian` is resolved below
+            fields["solver"] = _with(fields.get("solver", base.solver), {"jacobian_setting": checked})
         elif section in _SECTION_FIELDS and (section not in ("rod", "surface") or key in _MATERIALS):
             # the field of the section's name: a Material, Contact, Solver or the chain's gravity
-            fields[section] = dataclasses.replace(fields.get(section, getattr(base, section)), **{key: checked})
+            fields[section] = _with(fields.get(section, getattr(base, section)), {key: checked})
         elif name == "rod.tip_radius":
             fields["tip_radius"] = checked
         elif name == "surface.height":
@@ -582,29 +583,45 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
             fields[key] = checked
     if "length" in lists or "mass" in lists:
         chain = fields.get("chain", base.chain)
-        fields["chain"] = dataclasses.replace(chain, length=tuple(lists.get("length", chain.length)),
-                                              mass=tuple(lists.get("mass", chain.mass)))
+        fields["chain"] = _with(chain, {"length": tuple(lists.get("length", chain.length)),
+                                        "mass": tuple(lists.get("mass", chain.mass))})
     for field in ("q0", "u0"):
         if field in lists:
             fields[field] = tuple(lists[field])
-    scene = _replaced(base, fields)
+    if "solver" in fields:
+        solver = fields["solver"]
+        jacobian = _jacobian(solver.method, solver.jacobian_setting, n)
+        if jacobian != solver.jacobian:
+            fields["solver"] = _with(solver, {"jacobian": jacobian})
+    scene = _with(base, fields)
     if cross_checked:
         _check_physics(scene)
     return scene
 
 
+def with_solver(base: Scene, settings: Mapping[str, Any]) -> Scene:
+    """`base` with some keys of its [solver] table changed (``{"rtol": 1e-8}``): each value
+    checked as the scene checks it, the Jacobian's "auto" resolved again; nothing else of
+    the scene is read, since no other key depends on the solver's."""
+    checked = {key: _checked_value(f"solver.{key}", "solver", key, None, value, base.n)
+               for key, value in settings.items()}
+    if "jacobian" in checked:  # the setting as given: `jacobian` is the resolved one
+        checked["jacobian_setting"] = checked.pop("jacobian")
+    solver = _with(base.solver, checked)
+    jacobian = _jacobian(solver.method, solver.jacobian_setting, base.n)
+    if jacobian != solver.jacobian:
+        solver = _with(solver, {"jacobian": jacobian})
+    return _with(base, {"solver": solver})
+
+
 _SECTION_FIELDS = {"chain", "rod", "surface", "contact", "solver"}  # sections that are a Scene field of their name
 
 
-def _replaced(base: Scene, fields: dict[str, Any]) -> Scene:
-    """`base` with some of its fields (by name) set to new values, checked by the caller.
-    Not through `Scene(...)`: a frozen dataclass's __init__ sets each field through
-    object.__setattr__, three times the cost (1.3 against 0.4 us), and a sweep makes a scene
-    per case. Scene has no __post_init__ to miss (test_scene checks both)."""
-    scene = object.__new__(Scene)
-    scene.__dict__.update(base.__dict__)
-    scene.__dict__.update(fields)
-    return scene
+def _with(value: Any, changes: dict[str, Any]) -> Any:
+    """A scene (or one of its sections) with some fields set to new values, checked by the
+    caller: dataclasses.replace through the class's own __init__, without its per-call
+    lookup of the fields (each of these dataclasses has exactly its fields in __dict__)."""
+    return type(value)(**{**value.__dict__, **changes})
 
 
 def joint_heights(scene: Scene) -> list[float]:

@@ -9,7 +9,6 @@ message into one that says what to try.
 from __future__ import annotations
 
 import struct
-from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -107,9 +106,6 @@ def summary_layout(ffi) -> SummaryLayout:
                          struct.Struct("=" + record_layout(ffi, "ig_summary", others)))
 
 
-_make_segment = partial(tuple.__new__, Segment)  # Segment._make without its Python frame (rows have its fields)
-
-
 class MachineRun(NamedTuple):
     """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
     ig_run's last return code with the message of a failure, and the time the run stopped."""
@@ -124,9 +120,6 @@ class MachineRun(NamedTuple):
     message: str
     t_last: float
     summaries: TallyRecords  # over the whole run, over its first impact (ig_summarize)
-
-
-_make_run = partial(tuple.__new__, MachineRun)  # MachineRun._make without its Python frame
 
 
 class CvodeSession:
@@ -251,7 +244,7 @@ class CvodeSession:
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
             rows = self._segment_record.iter_unpack(self._segment_bytes[:self.n_segments[0] * self._segment_record.size])
-            segments += map(_make_segment, rows if not base else [(r[0], base + r[1]) + r[2:] for r in rows])
+            segments += map(Segment._make, rows if not base else [(r[0], base + r[1]) + r[2:] for r in rows])
             if with_params:
                 new = ffi.new
                 segment_params.extend(new("model_params *", self.segments[j].params) for j in range(self.n_segments[0]))
@@ -267,7 +260,7 @@ class CvodeSession:
         else:
             t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
-        return _make_run((t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
+        return MachineRun._make((t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
                           self._summarized()))
 
     def _summarized(self) -> TallyRecords:

@@ -1,11 +1,13 @@
 """The pure-C loop (examples/c/impact_driver.c) against the Python API over the same impacts,
-and the C engine's instructions per step, by contact phase, and where they go (valgrind's
-callgrind, when installed), with the API's instructions per call beside the C loop's.
+and, in the same Python timings, `simulate(scene, rtol=...)` against the scene with that rtol
+inside it. Reported beside them, not judged: the C engine's instructions per step, by
+contact phase, and where they go (valgrind's callgrind, when installed), with the API's
+instructions per call beside the C loop's.
 
-Speed targets of the speed issue need a floor to compare with: the same generated model,
-phase machine and CVODE glue, driven by a C loop with no Python. The driver is built from
-the repository's examples/c (an editable install, as `make setup` makes); an installed
-package without it reports the figures as not measured.
+The targets need a floor to compare with: the same generated model, phase machine and CVODE
+glue, driven by a C loop with no Python. The driver is built from the repository's
+examples/c (an editable install, as `make setup` makes); an installed package without it
+reports the figures as not measured.
 """
 from __future__ import annotations
 
@@ -52,21 +54,37 @@ def _c_ms(driver: Path) -> float:
 
 
 _PYTHON_LOOP = """
-import sys, time
+import statistics, sys, time
 import impactgen
-scene = impactgen.load_scene(sys.argv[1]).replace({"solver.rtol": float(sys.argv[2])})
+base = impactgen.load_scene(sys.argv[1])
+rtol = float(sys.argv[2])
+scene = base.replace({"solver.rtol": rtol})
 warm, block, count = (int(a) for a in sys.argv[3:6])
+OPTION_WARM = 20
+TURN = 20  # calls of one form before the other's: about a millisecond, shorter than the host's swings
+for _ in range(OPTION_WARM):  # the same count in every process: callgrind's difference cancels it
+    impactgen.simulate(base, rtol=rtol, record_steps=False).summary
 for _ in range(warm):
     impactgen.simulate(scene, record_steps=False).summary
 print("ready", flush=True)
-for _ in sys.stdin:  # one timing per line asked for
-    blocks = []
+clock = time.perf_counter
+turn = min(TURN, block)
+for _ in sys.stdin:  # one timing per line asked for: the scene with its rtol, and the option, in short turns
+    inside, option = [], []
     for _ in range(count):
-        started = time.perf_counter()
-        for _ in range(block):
-            impactgen.simulate(scene, record_steps=False).summary
-        blocks.append((time.perf_counter() - started) / block * 1e3)
-    print(sorted(blocks)[len(blocks) // 2], flush=True)
+        a = b = 0.0
+        for _ in range(block // turn):
+            started = clock()
+            for _ in range(turn):
+                impactgen.simulate(scene, record_steps=False).summary
+            middle = clock()
+            for _ in range(turn):
+                impactgen.simulate(base, rtol=rtol, record_steps=False).summary
+            a, b = a + middle - started, b + clock() - middle
+        inside.append(a / (block // turn * turn) * 1e3)
+        option.append(b / (block // turn * turn) * 1e3)
+    ratios = [b / a for a, b in zip(inside, option)]
+    print(statistics.median(inside), statistics.median(option), statistics.median(ratios), flush=True)
 """
 
 
@@ -86,11 +104,16 @@ class PythonLoop:
             self.close()
             raise RuntimeError("the Python API's timing process did not start")
 
-    def ms(self) -> float:
-        """One timing: the median of PY_BLOCKS blocks of PY_BLOCK calls, ms per call."""
+    def ms(self) -> tuple[float, float, float]:
+        """One timing: PY_BLOCKS blocks of PY_BLOCK calls of the scene with its rtol, in turns
+        of 20 calls with as many of the scene given the rtol as an option (a turn lasts about
+        a millisecond, so the host's speed moves both forms alike, and each form runs on
+        warm caches of its own); the medians (ms per call) of each and of the blocks' ratios
+        (option / inside)."""
         self.process.stdin.write("\n")
         self.process.stdin.flush()
-        return float(self.process.stdout.readline())
+        inside, option, ratio = (float(v) for v in self.process.stdout.readline().split())
+        return inside, option, ratio
 
     def close(self) -> None:
         self.process.stdin.close()
@@ -106,19 +129,24 @@ class PythonLoop:
 def paired_timings(driver: Path, scene_name: str) -> dict:
     """ROUNDS pairs of a C timing and a Python timing back to back, the order swapped every
     round (a trend in the host's speed then favours neither); the ratio is the median of the
-    pairs' ratios, as the sweep-overhead target takes it."""
-    c, py = [], []
+    pairs' ratios, as the sweep-overhead target takes it. The Python timing also gives the
+    cost of `simulate(scene, rtol=...)` against the scene with that rtol inside it."""
+    c, py, option, option_ratios = [], [], [], []
     with PythonLoop(scene_name) as python:
         for k in range(ROUNDS):
             if k % 2:
-                py.append(python.ms())
+                timing = python.ms()
                 c.append(_c_ms(driver))
             else:
                 c.append(_c_ms(driver))
-                py.append(python.ms())
+                timing = python.ms()
+            py.append(timing[0])
+            option.append(timing[1])
+            option_ratios.append(timing[2])
     ratios = [p / q for p, q in zip(py, c)]
     return {"c_ms": statistics.median(c), "python_ms": statistics.median(py), "c_runs_ms": c, "python_runs_ms": py,
-            "pair_ratios": ratios, "ratio": statistics.median(ratios)}
+            "pair_ratios": ratios, "ratio": statistics.median(ratios), "option_ms": statistics.median(option),
+            "option_runs_ms": option, "option_ratios": option_ratios, "option_ratio": statistics.median(option_ratios)}
 
 
 def _instructions_per_step(driver: Path, folder: Path) -> dict:
@@ -237,7 +265,8 @@ def _where_instructions_go(driver: Path, folder: Path) -> dict:
 
 
 def c_loop(scene_name: str = "paper") -> dict:
-    """The C loop against the Python API (summary read), alternated; and instructions per step."""
+    """The C loop against the Python API (summary read) and the option form, alternated; and
+    the instruction counts (reported)."""
     import impactgen
     if not (DRIVER / "impact_driver.c").is_file():
         return {"error": f"the C driver's source is not here ({DRIVER}): an editable install has it"}

@@ -23,6 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from .verdict import verdict
+
 OVERHEAD_TARGET = 1.15  # sweep wall time at most this times N x engine time / workers
 WORKERS = 2
 MONTE_CARLO = {  # the ranges docs/sweeps.md states
@@ -174,14 +176,13 @@ def sweep_benchmark(quick: bool) -> dict:
 
 
 def sweep_targets(result: dict) -> list[dict]:
-    from .report import _verdict
     rows = []
     o = result.get("overhead")
     if o:
         rows.append({"target": f"summary-only sweep, {o['workers']} workers: wall <= {OVERHEAD_TARGET} x "
                                "(N x engine time per impact / workers)",
                      "measured": f"{o['ratio']:.2f}x ({o['cases']} cases, {o['wall_s']:.1f} s)",
-                     "verdict": _verdict(o["ratio"], o["ratio"] <= OVERHEAD_TARGET)})
+                     "verdict": verdict(o["ratio"], o["ratio"] <= OVERHEAD_TARGET)})
     mc = result.get("monte_carlo")
     if mc:
         for where, key in (("local pool", "pool"), ("Dask cluster (scheduler + 2 workers)", "dask")):
