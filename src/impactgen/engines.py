@@ -13,6 +13,7 @@ import numpy as np
 from . import phases
 from .build import CompiledModel, compile_model
 from .codegen.spec import ModelSpec
+from .dense import dropped_times_warning
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
@@ -80,7 +81,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     t_eval : array_like, optional
         Sorted times in s at which to return the solution (read from the integrator's own
         interpolating polynomial, as solve_ivp does). Times after the run's end (the first
-        separation) are left out. Without it, the samples are every integrator step.
+        separation) are left out, as solve_ivp does after a terminal event, and
+        ``result.warnings`` says how many and when the run ended. Without it, the samples are every integrator step.
     dense_output : bool, default False
         Keep the interpolating polynomials, so that ``result.sol(t)`` gives y at any time
         of the run, across phase switches.
@@ -132,10 +134,14 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
                 raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
-        return phases.run(_model(*_structure(scene)), scene, t_eval=times, dense_output=bool(dense_output),
-                          record_steps=bool(record_steps))
-    from . import reference
-    return reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))
+        result = phases.run(_model(*_structure(scene)), scene, t_eval=times, dense_output=bool(dense_output),
+                            record_steps=bool(record_steps))
+    else:
+        from . import reference
+        result = reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))
+    if times is not None and len(result.t) < len(times):  # warnings are made once, then kept
+        result.warnings.extend(dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1])))
+    return result
 
 
 def _c_method(method: Any) -> str:

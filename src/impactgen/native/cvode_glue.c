@@ -33,6 +33,8 @@ struct ig_solver {
     void *erk;        /* ARKODE ERKStep instead of CVODE (method IG_METHOD_ERK): explicit Runge-Kutta */
     ig_dopri5 *rk;    /* the plain-C pair instead (IG_METHOD_DOPRI5), or first (IG_METHOD_AUTO) */
     int on_cvode;     /* CVODE integrates the segment under way (always for BDF and Adams) */
+    int to_cvode;     /* auto: CVODE takes the segment over at the next step, once this step's
+                       * polynomial (the pair's) has been read for dense output */
     int continued;    /* a segment of this run has begun: the next may start from its last step */
     int dirs[MODEL_NEVENT];
     N_Vector y;
@@ -357,6 +359,7 @@ int ig_segment_start(ig_solver *s, const model_params *params, double t0, const 
     }
     s->t_stop = t_stop;
     s->segment_steps = 0;
+    s->to_cvode = 0;
     s->message[0] = '\0';
 
     memcpy(s->y_data, y0, sizeof(double) * MODEL_NSTATE);
@@ -500,17 +503,21 @@ static int step_once(ig_solver *s, double *t_now, int *roots_found)
                  "more than %ld steps in one phase (solver.max_steps)", s->max_steps);
         return IG_ERR_TOO_MUCH_WORK;
     }
+    if (s->to_cvode) {
+        /* auto: BDF finishes the segment. Not at the end of the pair's last step: the caller
+         * then reads that step's polynomial, which a fresh CVODE does not have (its
+         * CVodeGetDky gave NaN: dense output and t_eval were NaN over that step). */
+        s->to_cvode = 0;
+        if (start_cvode(s, s->rk->t) != 0) {
+            s->active = 0;
+            return IG_ERR_SOLVER;
+        }
+        s->total.nstiff++;
+    }
     if (s->rk && !s->on_cvode) {
         const int flag = step_dopri5(s, t_now, roots_found);
         const long budget = s->max_steps / 2 < IG_AUTO_PAIR_STEPS ? s->max_steps / 2 : IG_AUTO_PAIR_STEPS;
-        if (flag == IG_STEPPED && s->cvode && (s->rk->stiff || s->segment_steps >= budget)) {
-            /* auto: BDF finishes the segment */
-            if (start_cvode(s, *t_now) != 0) {
-                s->active = 0;
-                return IG_ERR_SOLVER;
-            }
-            s->total.nstiff++;
-        }
+        s->to_cvode = flag == IG_STEPPED && s->cvode && (s->rk->stiff || s->segment_steps >= budget);
         return flag;
     }
     sunrealtype t;
