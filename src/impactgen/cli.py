@@ -92,7 +92,7 @@ def _parser() -> argparse.ArgumentParser:
     kept.add_argument("--trajectory-cases", default=None, metavar="I,J,...",
                       help="keep the samples of these cases (numbered from 0, as the table's 'case')")
     sw.add_argument("--plot", action="store_true", help="draw the figures the varied keys call for "
-                    "into OUT/figures (needs --out)")
+                    "into OUT/_figures (needs --out)")
     sw.add_argument("--out", type=Path, default=None, help="folder for sweep.parquet; the same command "
                     "resumes an interrupted sweep there")
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
