@@ -65,3 +65,92 @@ def test_t_eval_after_the_end_is_dropped_with_a_warning(paper_scene, engine):
     assert "1 of the 3 t_eval times" in notes[0] and f"{t_final:.6g}" in notes[0]
     full = impactgen.simulate(paper_scene, engine=engine, t_eval=[0.0, 1e-4])
     assert not [w for w in full.warnings if "t_eval" in w]
+
+
+# -- 3. exceptions that are not ours: each is one line of impactgen.errors -------------------
+
+def _paper():
+    return impactgen.load_scene("paper")
+
+
+ENTRY_CALLS = {  # what a hostile caller passed, and a word of the one line it must get
+    "simulate(None)": (lambda: impactgen.simulate(None), "simulate() takes a Scene"),
+    "simulate({...})": (lambda: impactgen.simulate({"name": "x"}), "simulate() takes a Scene"),
+    "simulate(3)": (lambda: impactgen.simulate(3), "simulate() takes a Scene"),
+    "load_scene(None)": (lambda: impactgen.load_scene(None), "load_scene takes a scene file"),
+    "load_scene(3)": (lambda: impactgen.load_scene(3), "load_scene takes a scene file"),
+    "load_scene(b'paper')": (lambda: impactgen.load_scene(b"paper"), "load_scene takes a scene file"),
+    "overrides rod.E=10**400": (lambda: impactgen.load_scene("paper", overrides={"rod.E": 10**400}),
+                                "beyond what a float holds"),
+    "overrides {1: 2}": (lambda: impactgen.load_scene("paper", overrides={1: 2}), "not a string"),
+    "overrides [(key, value)]": (lambda: impactgen.load_scene("paper", overrides=[("rod.E", 1e11)]),
+                                 "overrides are a mapping"),
+    "overrides 'rod.E=1'": (lambda: impactgen.load_scene("paper", overrides="rod.E=1"), "overrides are a mapping"),
+    "replace('rod.E=1')": (lambda: _paper().replace("rod.E=1"), "overrides are a mapping"),
+    "replace([1, 2])": (lambda: _paper().replace([1, 2]), "overrides are a mapping"),
+    "replace(rod_E=1)": (lambda: _paper().replace(rod_E=1), "a scene key goes in overrides"),
+    "replace(rod=5)": (lambda: _paper().replace(rod=5), "expected a Material"),
+    "replace({'chain.links': 10**400})": (lambda: _paper().replace({"chain.links": 10**400}), "chain.links"),
+    "scene_from_dict(None)": (lambda: impactgen.scene_from_dict(None), "a scene is a mapping"),
+    "sweep(None)": (lambda: impactgen.sweep(None, vary={"initial.u[2]": [-0.3]}), "load_scene takes"),
+}
+
+
+@pytest.mark.parametrize("call", list(ENTRY_CALLS))
+def test_a_hostile_argument_is_one_line_of_our_errors(call):
+    function, words = ENTRY_CALLS[call]
+    with pytest.raises(ImpactgenError) as caught:
+        function()
+    message = str(caught.value)
+    assert words in message and "\n" not in message
+
+
+def test_simulate_takes_an_example_name_as_load_scene_does(paper_scene):
+    by_name = impactgen.simulate("paper")
+    assert by_name.summary["delta_r"] == impactgen.simulate(paper_scene).summary["delta_r"]
+
+
+def _cli(*args, env=None, user=None):
+    import os
+    import subprocess
+    import sys
+    command = [sys.executable, "-m", "impactgen.cli", *args]
+    if user is not None:
+        command = ["setpriv", f"--reuid={user}", f"--regid={user}", "--clear-groups", *command]
+    return subprocess.run(command, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, **(env or {})})
+
+
+def test_a_toml_file_nested_500_deep_is_exit_2(tmp_path):
+    deep = tmp_path / "deep.toml"
+    deep.write_text("x = " + "[" * 500 + "]" * 500 + "\n")
+    res = _cli("run", str(deep))
+    assert res.returncode == 2, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and "nested too deeply" in res.stderr
+    res = _cli("run", "paper", "--set", "rod.E=" + "[" * 500 + "]" * 500)
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+
+
+def test_a_read_only_cache_without_the_model_is_exit_3_naming_the_folder():
+    import os
+    import shutil
+    import sys
+    import tempfile
+    from pathlib import Path
+    user = None
+    if os.geteuid() == 0:  # root writes anywhere: run as nobody
+        if not sys.platform.startswith("linux") or shutil.which("setpriv") is None:
+            pytest.skip("needs setpriv to drop root")
+        user = 65534
+    top = Path(tempfile.mkdtemp(prefix="impactgen-read-only-"))  # reachable by that user (pytest's is not)
+    try:
+        top.chmod(0o755)
+        cache = top / "cache"
+        cache.mkdir(mode=0o555)
+        cache.chmod(0o555)
+        res = _cli("run", "paper", env={"IMPACTGEN_CACHE_DIR": str(cache)}, user=user)
+    finally:
+        shutil.rmtree(top)
+    assert res.returncode == 3, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert str(cache) in res.stderr and "IMPACTGEN_CACHE_DIR" in res.stderr and "lacks this model" in res.stderr

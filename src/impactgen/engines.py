@@ -5,6 +5,7 @@ option that will be refused), and the solver settings override the scene's own.
 """
 from __future__ import annotations
 
+import os
 from functools import lru_cache
 from typing import Any
 
@@ -17,7 +18,7 @@ from .dense import dropped_times_warning
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import Scene
+from .scene import Scene, load_scene
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -60,8 +61,9 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
 
     Parameters
     ----------
-    scene : Scene
-        A checked scene (`load_scene`, `scene_from_dict`).
+    scene : Scene, str or Path
+        A checked scene (`load_scene`, `scene_from_dict`), or a scene file or a shipped
+        example's name, loaded as `load_scene` loads it.
     engine : {"c", "reference"}, default "c"
         "c": the generated C model under SUNDIALS CVODE (built on first use, then cached).
         "reference": the independent pure-Python engine on scipy's solve_ivp.
@@ -116,6 +118,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     >>> round(result.summary["delta_r"] * 1e6, 2)       # permanent deformation in um
     5.57
     """
+    if type(scene) is not Scene:
+        scene = _scene_of(scene)
     if unknown:
         name = sorted(unknown)[0]
         raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
@@ -142,6 +146,17 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     if times is not None and len(result.t) < len(times):  # warnings are made once, then kept
         result.warnings.extend(dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1])))
     return result
+
+
+def _scene_of(scene: Any) -> Scene:
+    """simulate()'s first argument as a Scene: a scene file or an example's name is loaded,
+    as load_scene does; anything else is refused in one line."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    raise SceneError("scene", f"simulate() takes a Scene (load_scene, scene_from_dict), a scene file or an "
+                              f"example's name such as 'paper'; got {type(scene).__name__} {scene!r:.60}")
 
 
 def _c_method(method: Any) -> str:

@@ -10,6 +10,7 @@ import dataclasses
 import difflib
 import functools
 import math
+import os
 import re
 from collections import abc
 from dataclasses import dataclass, field
@@ -119,6 +120,9 @@ class Scene:
             The checked scene. A change that leaves it inconsistent (three links with two
             initial angles, a tip inside the surface) raises `SceneError` naming the key.
         """
+        checked_overrides(overrides)
+        if fields:
+            _check_fields(self, fields)
         changed = dataclasses.replace(self, **fields) if fields else self
         return scene_from_dict(changed.to_dict(), overrides, source=self.source)
 
@@ -270,7 +274,11 @@ def _number(key: str, v: Any, integer: bool = False) -> float | int:
                 raise SceneError(key, f"expected an integer, got {v!r}")
             v = int(v)
         return v
-    v = float(v)
+    try:
+        v = float(v)
+    except OverflowError:  # an integer beyond any float (10**400)
+        raise SceneError(key, f"expected a finite number, got an integer of about {v.bit_length() * 0.30103:.0f} "
+                              "digits, beyond what a float holds") from None
     if not math.isfinite(v):
         raise SceneError(key, f"expected a finite number, got {v!r}")
     return v
@@ -346,6 +354,8 @@ def parse_override(text: str) -> tuple[str, Any]:
         raise SceneError("--set", f"missing key in {text!r}")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
+    except RecursionError:
+        raise SceneError(key, "the value is nested too deeply") from None
     except tomllib.TOMLDecodeError:
         if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.-]*", raw):
             value = raw
@@ -406,6 +416,20 @@ def check_values(dotted: str, values: Iterable[Any], links: int) -> None:
         if number and type(value) is float and math.isfinite(value) and not (spec.check and spec.check(value)):
             continue
         check_value(dotted, value, links)
+
+
+def checked_overrides(overrides: Any) -> Mapping[str, Any]:
+    """`overrides` if it is a mapping of dotted keys (strings) to values ({} for None);
+    anything else is refused in one line that shows how to write it."""
+    if overrides is None:
+        return {}
+    how = "overrides are a mapping of dotted scene keys to values, e.g. {'rod.E': 2.1e11, 'initial.u[2]': -0.3}"
+    if not isinstance(overrides, abc.Mapping):
+        raise SceneError("overrides", f"{how}; got {type(overrides).__name__} {overrides!r:.60}")
+    bad = next((k for k in overrides if not isinstance(k, str)), None)
+    if bad is not None:
+        raise SceneError("overrides", f"{how}; got the key {bad!r}, which is not a string")
+    return overrides
 
 
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
@@ -482,8 +506,11 @@ def _read_sections(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None = None,
                     source: str = "<memory>") -> Scene:
     """Check a scene given as nested dicts (as TOML parses it) and build a `Scene`."""
+    if not isinstance(raw, abc.Mapping):
+        raise SceneError(None, f"a scene is a mapping of tables (as TOML gives it), got {type(raw).__name__} "
+                               f"{raw!r:.60}")
     raw = _tables_copied(raw)
-    _apply_overrides(raw, overrides or {})
+    _apply_overrides(raw, checked_overrides(overrides))
     sections = _read_sections(raw)
 
     def get(section: str, key: str, n: int = 0) -> Any:
@@ -607,6 +634,20 @@ def _replaced(base: Scene, fields: dict[str, Any]) -> Scene:
     return scene
 
 
+def _check_fields(scene: Scene, fields: Mapping[str, Any]) -> None:
+    """Scene.replace's keyword fields: names of the dataclass, each a value of its field's
+    type (a whole section such as `solver`); a scene key is given in `overrides` instead."""
+    names = [f.name for f in dataclasses.fields(Scene)]
+    for name, value in fields.items():
+        if name not in names:
+            raise SceneError(name, f"Scene.replace takes whole fields ({', '.join(names)}) as keywords; "
+                                   f"a scene key goes in overrides, e.g. scene.replace({{'rod.E': 2.1e11}})")
+        current = getattr(scene, name)
+        if dataclasses.is_dataclass(current) and type(value) is not type(current):
+            raise SceneError(name, f"expected a {type(current).__name__} (e.g. dataclasses.replace(scene.{name}, "
+                                   f"...)), got {type(value).__name__} {value!r:.60}")
+
+
 def joint_heights(scene: Scene) -> list[float]:
     """Heights of the pivot (0), of every joint and of the tip (last), in m, at the start."""
     heights = [0.0]
@@ -679,6 +720,9 @@ def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
     (2, (-0.1, -0.3))
     """
     from .examples import example_text, find_example
+    if not isinstance(path, (str, os.PathLike)):
+        raise SceneError(None, f"load_scene takes a scene file (str or Path) or an example's name "
+                               f"such as 'paper', got {type(path).__name__} {path!r:.60}")
     path = Path(path)
     example = find_example(path)
     if example is not None:
@@ -699,6 +743,8 @@ def scene_from_text(text: str, overrides: Mapping[str, Any] | None = None, sourc
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(None, f"{source} is not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib recurses once per nested array or table
+        raise SceneError(None, f"{source} is not a scene: its arrays or tables are nested too deeply") from None
     return scene_from_dict(raw, overrides, source=source)
 
 
