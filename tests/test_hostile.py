@@ -50,9 +50,11 @@ def test_dense_output_outside_the_run_is_refused(paper_scene, engine):
     r = impactgen.simulate(paper_scene, engine=engine, dense_output=True)
     t_final = float(r.t[-1])
     assert np.isfinite(r.sol(0.0)).all() and np.isfinite(r.sol(t_final)).all()
-    for bad in (-1.0, t_final + 1.0, [0.0, t_final * 2], float("nan")):
+    for bad in (-1.0, t_final + 1.0, [0.0, t_final * 2], float("nan"), np.inf, None):
         with pytest.raises(SceneError, match=r"outside the run \[0, "):
             r.sol(bad)
+    with pytest.raises(SceneError, match="expected a time"):
+        r.sol("a")
 
 
 @pytest.mark.parametrize("engine", ["c", "reference"])
@@ -90,7 +92,8 @@ ENTRY_CALLS = {  # what a hostile caller passed, and a word of the one line it m
     "replace([1, 2])": (lambda: _paper().replace([1, 2]), "overrides are a mapping"),
     "replace(rod_E=1)": (lambda: _paper().replace(rod_E=1), "a scene key goes in overrides"),
     "replace(rod=5)": (lambda: _paper().replace(rod=5), "expected a Material"),
-    "replace({'chain.links': 10**400})": (lambda: _paper().replace({"chain.links": 10**400}), "chain.links"),
+    "replace({'chain.links': 10**400})": (lambda: _paper().replace({"chain.links": 10**400}), "about 400 digits"),
+    "load_scene('/dev/zero')": (lambda: impactgen.load_scene("/dev/zero"), "not a file"),
     "scene_from_dict(None)": (lambda: impactgen.scene_from_dict(None), "a scene is a mapping"),
     "sweep(None)": (lambda: impactgen.sweep(None, vary={"initial.u[2]": [-0.3]}), "load_scene takes"),
 }

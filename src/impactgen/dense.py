@@ -70,7 +70,10 @@ class DenseSolution:
         self.t_min, self.t_max = float(self.breaks[0]), float(self.breaks[-1])
 
     def __call__(self, t: float | np.ndarray) -> np.ndarray:
-        times = np.asarray(t, dtype=float)
+        try:
+            times = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            raise SceneError("t", f"expected a time or an array of times in s, got {t!r:.60}") from None
         flat = np.atleast_1d(times).ravel()
         if not self.pieces:
             raise SceneError("t", "this run has no dense output: it ended at its first point")

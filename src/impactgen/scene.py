@@ -40,6 +40,7 @@ JACOBIANS = ("auto", "analytic", "difference")
 JACOBIAN_AUTO_MAX_LINKS = 6
 
 _MISSING = object()
+MAX_SCENE_BYTES = 16 * 2**20  # a scene file is a few hundred bytes; /dev/zero would never end
 # A tip (or joint) this far below the surface, relative to the chain's length (at least
 # 1 m), still counts as touching it: the rounding of a height summed over the links (the
 # phase machine's own start test uses the same number).
@@ -273,6 +274,8 @@ def _number(key: str, v: Any, integer: bool = False) -> float | int:
             if not v.is_integer():
                 raise SceneError(key, f"expected an integer, got {v!r}")
             v = int(v)
+        if abs(v) >= 2**63:  # no count is this large; its digits would fill the message
+            raise SceneError(key, f"expected an integer, got one of about {v.bit_length() * 0.30103:.0f} digits")
         return v
     try:
         v = float(v)
@@ -728,6 +731,9 @@ def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
     if example is not None:
         return scene_from_text(example_text(example), overrides, source=f"<example {example}>")
     try:
+        if path.exists() and (not path.is_file() or path.stat().st_size > MAX_SCENE_BYTES):
+            raise SceneError(None, f"{path} is not a scene file: {'too large' if path.is_file() else 'not a file'} "
+                                   f"(a scene is a TOML file of at most {MAX_SCENE_BYTES // 2**20} MiB)")
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise SceneError(None, f"scene file not found: {path} (a shipped example is named without "
