@@ -221,3 +221,30 @@ def test_stability_prints_its_pass_count(tmp_path, monkeypatch, capsys):
     assert cli.main(["stability", "--quick", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "stability: 2 of 2 runs passed" in out
+
+
+def test_generate_writes_only_into_an_empty_or_generated_folder(tmp_path):
+    """The user's own model.c is not replaced silently (issue 37): only with --force."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "model.c").write_text("/* my own model */\n")
+    res = impactgen("generate", "paper", "--out", str(out))
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
+    assert "model.c" in res.stderr and "--force" in res.stderr
+    assert (out / "model.c").read_text() == "/* my own model */\n"
+    other = tmp_path / "notes"  # a folder of the user's, no file in the way: still not ours
+    other.mkdir()
+    (other / "notes.txt").write_text("mine\n")
+    assert impactgen("generate", "paper", "--out", str(other)).returncode == 2
+    fresh = tmp_path / "fresh"
+    assert impactgen("generate", "paper", "--out", str(fresh)).returncode == 0
+    assert impactgen("generate", "paper", "--out", str(fresh)).returncode == 0  # ours: written again
+    (fresh / "model.c").write_text("/* edited by hand */\n")
+    again = impactgen("generate", "paper", "--out", str(fresh))
+    assert again.returncode == 2 and "model.c" in again.stderr
+    assert (fresh / "model.c").read_text() == "/* edited by hand */\n"
+    forced = impactgen("generate", "paper", "--out", str(out), "--force")
+    assert forced.returncode == 0, forced.stderr
+    assert "my own model" not in (out / "model.c").read_text()
+    links = impactgen("--links", "1", "--out", str(other))
+    assert links.returncode == 2 and "--force" in links.stderr

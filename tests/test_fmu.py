@@ -234,3 +234,82 @@ def test_a_second_importer_libcosim_runs_the_co_simulation_fmu(fmus):
         assert got[name] == pytest.approx(getattr(run.impacts[0], name), rel=1e-6), name
     assert [got["u[1]"], got["u[2]"]] == pytest.approx(list(run.u[:, -1]), rel=1e-6)
     assert got["W_normal"] == pytest.approx(run.W_normal[-1], rel=1e-6)
+
+
+# start values load_scene refuses (issue 37): the FMU refuses them too, at the same boundary
+BELOW_SURFACE = [  # (FMU start values, the same as scene overrides, the key named, the link named)
+    ({"surface.height_initial": False, "surface.height": 0.0}, {"surface.height": 0.0},
+     "surface.height", "link 2"),
+    ({"surface.height_initial": False, "surface.height": -0.4397, "initial.q[2]": np.radians(60.0)},
+     {"surface.height": -0.4397, "initial.q_deg": [-70.0, 60.0]}, "initial.q", "link 1"),
+    ({"initial.q[1]": np.radians(80.0)}, {"initial.q_deg": [80.0, -60.0]}, "initial.q", "link 1"),
+]
+ON_OR_ABOVE = [  # the same kinds of start, just on the allowed side
+    ({"surface.height_initial": False, "surface.height": -1.9}, {"surface.height": -1.9}),
+    ({"surface.height_initial": False, "surface.height": -0.9398, "initial.q[2]": np.radians(60.0)},
+     {"surface.height": -0.9398, "initial.q_deg": [-70.0, 60.0]}),
+]
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("start, overrides, key, link", BELOW_SURFACE)
+def test_a_start_below_the_surface_is_refused_as_load_scene_refuses_it(fmus, kind, start, overrides, key,
+                                                                          link):
+    with pytest.raises(impactgen.SceneError, match=key):
+        impactgen.load_scene("paper", overrides=overrides)
+    log = EventLog()
+    with pytest.raises(Exception):
+        simulate_fmu(str(fmus["paper"]), fmi_type=kind, stop_time=1e-3, start_values=start, logger=log,
+                     debug_logging=True)
+    assert log.errors and key in log.errors[-1] and link in log.errors[-1], log.errors
+
+
+@pytest.mark.parametrize("start, overrides", ON_OR_ABOVE)
+def test_a_start_on_or_above_the_surface_runs(fmus, start, overrides):
+    impactgen.load_scene("paper", overrides=overrides)
+    log = EventLog()
+    simulate_fmu(str(fmus["paper"]), fmi_type="CoSimulation", stop_time=1e-3, start_values=start,
+                 logger=log, debug_logging=True)
+    assert log.errors == []
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_null_arrays_are_an_error_not_a_crash(fmus, tmp_path, kind):
+    """Outside the FMI contract, but as the Reference-FMUs do: fmi2Error, no segfault."""
+    import ctypes
+    from fmpy.fmi2 import FMU2Model
+    md = read_model_description(str(fmus["paper"]))
+    with zipfile.ZipFile(fmus["paper"]) as z:
+        z.extractall(tmp_path)
+    cls, model = (FMU2Model, md.modelExchange) if kind == "ModelExchange" else (FMU2Slave, md.coSimulation)
+    fmu = cls(guid=md.guid, unzipDirectory=str(tmp_path), modelIdentifier=model.modelIdentifier,
+              instanceName="nulls")
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE, \
+        fmi2CallbackFreeMemoryTYPE, calloc, free
+    messages: list[str] = []
+    callbacks = fmi2CallbackFunctions()  # its own logger: FMPy's default one may point at a freed one
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, text: messages.append(text))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    fmu.instantiate(callbacks=callbacks)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    lib = fmu.dll
+    buf, ints = (ctypes.c_double * 8)(), (ctypes.c_int * 8)()
+    vr = (ctypes.c_uint * 1)(0)
+    c = ctypes.c_void_p(fmu.component)
+    assert lib.fmi2SetReal(c, None, 1, buf) == 3  # fmi2Error
+    assert lib.fmi2SetReal(c, vr, 1, None) == 3
+    fmu.exitInitializationMode()
+    for name, args in (("fmi2GetReal", (None, 1, buf)), ("fmi2GetReal", (vr, 1, None)),
+                       ("fmi2GetInteger", (None, 1, ints)), ("fmi2GetBoolean", (None, 1, ints))):
+        assert getattr(lib, name)(c, *args) == 3, name
+    if kind == "ModelExchange":
+        states = len(md.derivatives)
+        for name in ("fmi2GetContinuousStates", "fmi2GetDerivatives", "fmi2GetNominalsOfContinuousStates",
+                     "fmi2SetContinuousStates"):
+            assert getattr(lib, name)(c, None, states) == 3, name
+        assert lib.fmi2GetEventIndicators(c, None, md.numberOfEventIndicators) == 3
+        assert lib.fmi2NewDiscreteStates(c, None) == 3
+    assert messages and all(b"is NULL" in m for m in messages)
+    fmu.freeInstance()

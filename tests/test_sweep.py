@@ -177,11 +177,11 @@ def test_out_folder_keeps_the_scene_resumes_and_is_not_shared(tmp_path):
     assert b"paper-double-pendulum" in meta[b"impactgen.scene"]
     assert b"linspace" not in meta[b"impactgen.sweep"]  # the grid is stored as its values
     assert meta[b"impactgen.sweep"].startswith(b"--vary initial.u[2]=")
-    parts = sorted((tmp_path / "parts").iterdir())
+    parts = sorted((tmp_path / "_parts").iterdir())
     # a resume computes nothing again: no new part, the same rows
     calls = []
     again = impactgen.sweep("paper", vary=vary, workers=1, out=tmp_path, progress=calls.append)
-    assert sorted((tmp_path / "parts").iterdir()) == parts and calls == [3]
+    assert sorted((tmp_path / "_parts").iterdir()) == parts and calls == [3]
     assert again.equals(first)
     # a lost part is computed again, the others are not
     parts[0].unlink()
@@ -299,7 +299,7 @@ def _children(pid: int) -> list[int]:
 
 def _wait_for_parts(out: Path, at_least: int, process: subprocess.Popen) -> None:
     for _ in range(600):
-        if len(list((out / "parts").glob("part-*.parquet"))) >= at_least or process.poll() is not None:
+        if len(list((out / "_parts").glob("part-*.parquet"))) >= at_least or process.poll() is not None:
             return
         time.sleep(0.05)
 
@@ -341,17 +341,17 @@ def test_sigterm_keeps_the_finished_rows_and_a_resume_computes_only_the_rest(tmp
     _, stderr = process.communicate(timeout=300)
     assert process.returncode == 130, stderr
     assert "run the same command to resume" in stderr
-    first_parts = {p.name: p.read_bytes() for p in (out / "parts").glob("part-*.parquet")}
-    done = sum(len(pq_rows(p)) for p in (out / "parts").glob("part-*.parquet"))
+    first_parts = {p.name: p.read_bytes() for p in (out / "_parts").glob("part-*.parquet")}
+    done = sum(len(pq_rows(p)) for p in (out / "_parts").glob("part-*.parquet"))
     assert 0 < done < 160
     resumed = subprocess.run(args, capture_output=True, text=True, timeout=600)
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming: {done} of 160 cases were done" in resumed.stderr
-    assert all((out / "parts" / name).read_bytes() == data for name, data in first_parts.items())
+    assert all((out / "_parts" / name).read_bytes() == data for name, data in first_parts.items())
     import pandas as pd
     table = pd.read_parquet(out / "sweep.parquet")
     assert sorted(table["case"]) == list(range(160))
-    new_rows = sum(len(pq_rows(p)) for p in (out / "parts").glob("part-*.parquet") if p.name not in first_parts)
+    new_rows = sum(len(pq_rows(p)) for p in (out / "_parts").glob("part-*.parquet") if p.name not in first_parts)
     assert new_rows == 160 - done  # the finished cases were not computed again
 
 
@@ -366,19 +366,19 @@ def test_plot_and_trajectories_draw_the_paper_figures(tmp_path):
                                 "--trajectories", "4", "--plot", "--out", str(tmp_path), "--quiet"],
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
-    assert len(list((tmp_path / "trajectories").glob("case-*.parquet"))) == 4
+    assert len(list((tmp_path / "_trajectories").glob("case-*.parquet"))) == 4
     named = subprocess.run(CLI + ["sweep", "paper", "--vary", "initial.u[2]=linspace(-0.5,-0.1,6)",
                                   "--trajectory-cases", "1,4", "--out", str(tmp_path / "named"), "--quiet"],
                            capture_output=True, text=True, timeout=300)
     assert named.returncode == 0, named.stderr
-    assert sorted(p.name for p in (tmp_path / "named" / "trajectories").iterdir()) == \
+    assert sorted(p.name for p in (tmp_path / "named" / "_trajectories").iterdir()) == \
         ["case-1.parquet", "case-4.parquet"]
     bad = subprocess.run(CLI + ["sweep", "paper", "--vary", "initial.u[2]=[-0.2]", "--trajectory-cases", "3",
                                 "--out", str(tmp_path / "bad"), "--quiet"], capture_output=True, text=True,
                          timeout=300)
     assert bad.returncode == 2 and "case 3 does not exist" in bad.stderr
     for name in ("kinetic_energy.png", "delta_T_vs_delta_r.png", "delta_r_vs_initial_u2.png"):
-        assert (tmp_path / "figures" / name).exists(), name
+        assert (tmp_path / "_figures" / name).exists(), name
     drawn = impactgen.sweep("paper", vary={"initial.u[2]": "uniform(-0.5,-0.1)"}, random=30, workers=1,
                             out=tmp_path / "random")
     from impactgen.sweep.figures import plot_sweep
@@ -449,3 +449,110 @@ def test_a_chunk_that_kills_its_worker_fails_alone(tmp_path):
     assert got["cases"] == 64 and got["failed"] == first and got["statuses"] == ["failed", "ok"]
     assert got["messages"] == [f"its worker process died {MAX_CHUNK_TRIES} times (out of memory, or killed)"]
     assert res.stderr.count("a worker process died") == MAX_CHUNK_TRIES
+
+
+# ----------------------------------------------------------------------------- hostile input (issue 37)
+
+def test_a_huge_grid_is_refused_before_it_is_made():
+    """1e9 values: refused in one line naming the key and the limit, not made and then
+    killed for memory (run under a 2 GB address-space limit so that a regression cannot
+    take the machine's memory)."""
+    code = ("import resource; resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30)); "
+            "from impactgen.cli import main; raise SystemExit(main())")
+    res = subprocess.run([sys.executable, "-c", code, "sweep", "paper", "--vary",
+                          "initial.u[2]=linspace(-0.5,-0.1,1000000000)"], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 2, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert "initial.u[2]" in res.stderr and "10000000" in res.stderr
+
+
+@pytest.mark.parametrize("vary, words", [
+    (None, "expected vary="),
+    (5, "expected vary="),
+    ("initial.u[2]=[1,2]", "expected vary="),
+    ([1, 2], "expected vary="),
+    ({1: [1, 2]}, "must be a scene key"),
+    ({"initial.u[2]": "linspace(0,1,1e10)"}, "limit"),
+])
+def test_a_vary_that_is_not_a_specification_is_named(vary, words):
+    with pytest.raises(SceneError, match=words):
+        impactgen.sweep("paper", vary=vary, workers=1)
+
+
+def test_a_bare_number_in_vary_is_a_list_of_one():
+    one = impactgen.sweep("paper", vary={"initial.u[2]": -0.3, "contact.friction": np.float64(0.2)}, workers=1)
+    listed = impactgen.sweep("paper", vary={"initial.u[2]": [-0.3], "contact.friction": [0.2]}, workers=1)
+    assert len(one) == 1 and _comparable(one).equals(_comparable(listed))
+
+
+READERS = ["pandas", "pyarrow.dataset", pytest.param("dask", marks=pytest.mark.slow)]
+
+
+def _read_folder(reader: str, folder: Path):
+    if reader == "pandas":
+        import pandas as pd
+        return pd.read_parquet(folder)
+    if reader == "pyarrow.dataset":
+        import pyarrow.dataset as ds
+        return ds.dataset(folder, format="parquet").to_table().to_pandas()
+    dd = pytest.importorskip("dask.dataframe")
+    return dd.read_parquet(str(folder)).compute()
+
+
+@pytest.mark.parametrize("reader", READERS)
+def test_the_out_folder_reads_as_one_dataset_each_case_once(tmp_path, reader):
+    pytest.importorskip("matplotlib")
+    vary = {"initial.u[2]": "linspace(-0.4,-0.2,3)"}
+    table = impactgen.sweep("paper", vary=vary, workers=1, out=tmp_path, trajectories=2)
+    from impactgen.sweep.figures import plot_sweep
+    plot_sweep(table, SweepSpec.from_vary(vary), tmp_path)  # figures beside the table too
+    read = _read_folder(reader, tmp_path)
+    assert sorted(read["case"]) == [0, 1, 2]
+    np.testing.assert_array_equal(read.sort_values("case")["delta_r"], table["delta_r"])
+
+
+def test_a_folder_of_the_old_layout_resumes_and_reads_as_one_dataset(tmp_path):
+    import pandas as pd
+    vary = {"initial.u[2]": "linspace(-0.4,-0.2,3)"}
+    first = impactgen.sweep("paper", vary=vary, workers=1, out=tmp_path)
+    (tmp_path / "_parts").rename(tmp_path / "parts")  # as written before the "_" names
+    (tmp_path / "_sweep.json").rename(tmp_path / "sweep.json")
+    calls = []
+    again = impactgen.sweep("paper", vary=vary, workers=1, out=tmp_path, progress=calls.append)
+    assert calls == [3] and again.equals(first)  # resumed: nothing computed again
+    assert sorted(pd.read_parquet(tmp_path)["case"]) == [0, 1, 2]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0]
+    except FileNotFoundError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_killed_driver_takes_its_workers_with_it_and_the_same_command_resumes(tmp_path):
+    out = tmp_path / "driver-killed"
+    args = CLI + ["sweep", "paper", *SLOW_CASES, "--workers", "2", "--out", str(out)]
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for_parts(out, 1, process)
+        workers = _children(process.pid)
+        assert process.poll() is None and workers, "the sweep ended before its driver could be killed"
+        process.kill()  # SIGKILL: no handler runs
+        process.communicate(timeout=30)
+        deadline = time.monotonic() + 20
+        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(_alive(w) for w in workers), "the workers outlived their driver"
+    finally:
+        for w in _children(process.pid) if process.poll() is None else []:
+            os.kill(w, signal.SIGKILL)
+    resumed = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming:" in resumed.stderr
+    import pandas as pd
+    assert sorted(pd.read_parquet(out)["case"]) == list(range(160))

@@ -278,6 +278,7 @@ def compile_model(spec: ModelSpec) -> CompiledModel:
         entry = root / key
         manifest = _valid(entry)
         if manifest is None:
+            _check_writable(root)
             entry = _build_entry(spec, sundials, key, root)
             manifest = _valid(entry)
             if manifest is None:
@@ -293,6 +294,17 @@ def compile_model(spec: ModelSpec) -> CompiledModel:
         )
         _loaded[spec] = compiled
         return compiled
+
+
+def _check_writable(root: Path) -> None:
+    """A cache folder that exists but cannot be written (read-only, another user's) ends in
+    one line when it lacks the model, rather than in a PermissionError from the build lock."""
+    try:
+        with tempfile.TemporaryFile(dir=root):
+            pass
+    except OSError as exc:
+        raise BuildError(f"the build cache {root} lacks this model and cannot be written "
+                         f"({exc.strerror or exc}); set IMPACTGEN_CACHE_DIR to a writable folder") from None
 
 
 def _import(name: str, path: Path) -> ModuleType:

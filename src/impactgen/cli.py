@@ -48,6 +48,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="folder for the generated C and scene (with --links; "
                    "default generated/chainN)")
     p.add_argument("--prefix", default="model", help="C name prefix of the generated files (default model)")
+    p.add_argument("--force", action="store_true", help=FORCE_HELP)
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
 
@@ -92,7 +93,7 @@ def _parser() -> argparse.ArgumentParser:
     kept.add_argument("--trajectory-cases", default=None, metavar="I,J,...",
                       help="keep the samples of these cases (numbered from 0, as the table's 'case')")
     sw.add_argument("--plot", action="store_true", help="draw the figures the varied keys call for "
-                    "into OUT/figures (needs --out)")
+                    "into OUT/_figures (needs --out)")
     sw.add_argument("--out", type=Path, default=None, help="folder for sweep.parquet; the same command "
                     "resumes an interrupted sweep there")
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -146,6 +147,7 @@ def _parser() -> argparse.ArgumentParser:
     gen.add_argument("scene", type=Path, help=SCENE_HELP)
     gen.add_argument("--out", type=Path, help="folder for the C files (default generated/<name>)")
     gen.add_argument("--prefix", default="model", help="C name prefix (default model)")
+    gen.add_argument("--force", action="store_true", help=FORCE_HELP)
     gen.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     gen.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
@@ -185,14 +187,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "generate":
             from .scene import load_scene
             scene = load_scene(args.scene, _overrides(args.set))
-            return _generate(scene, args.out or Path("generated") / scene.name, args.prefix)
+            return _generate(scene, args.out or Path("generated") / scene.name, args.prefix, force=args.force)
         if args.links is not None:
             if args.links < 1 or args.links > 60:
                 raise SceneError("--links", f"expected a number of links from 1 to 60, got {args.links}")
             from .scene import steel_chain_scene
             return _generate(steel_chain_scene(args.links),
                              args.out or Path("generated") / f"chain{args.links}", args.prefix,
-                             write_scene=True)
+                             write_scene=True, force=args.force)
         raise SceneError(None, "nothing to do: give a command (run, examples, generate, plot, ...) or "
                                "--links N; see 'impactgen --help'")
     except ImpactgenError as exc:
@@ -250,7 +252,53 @@ def _overrides(items: list[str]) -> dict:
     return dict(parse_override(item) for item in items)
 
 
-def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
+FORCE_HELP = "write into --out even if it holds files impactgen did not write there (they are replaced)"
+GENERATED_MANIFEST = ".impactgen-generated.json"  # what `generate` wrote into a folder, with digests
+
+
+def _digest(path: Path) -> str:
+    import hashlib
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _check_out_folder(out: Path, files: dict[str, str], force: bool) -> None:
+    """`out` may take `files` if it is empty or new, or if every file they replace is one
+    impactgen wrote there and nobody changed since (its manifest says); else --force."""
+    if force or not out.exists():
+        return
+    if not out.is_dir():
+        raise SceneError("--out", f"{out} is a file, not a folder")
+    try:
+        known = json.loads((out / GENERATED_MANIFEST).read_text()).get("files", {})
+    except FileNotFoundError:
+        known = {}
+    except (OSError, ValueError, AttributeError):
+        known = {}  # unreadable: treated as absent, so nothing is replaced unasked
+    foreign = sorted(name for name in files if (out / name).exists()
+                     and (name not in known or _digest(out / name) != known[name]))
+    if not known and any(out.iterdir()):
+        foreign = foreign or sorted(p.name for p in out.iterdir())[:3]
+    if foreign:
+        raise SceneError("--out", f"{out} holds files impactgen did not write or that were changed since "
+                                  f"({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}); choose an "
+                                  "empty folder, or add --force to replace them")
+
+
+def _write_generated(out: Path, files: dict[str, str]) -> None:
+    """Write `files` into `out` and note them, with their digests, in its manifest."""
+    out.mkdir(parents=True, exist_ok=True)
+    manifest = out / GENERATED_MANIFEST
+    try:
+        known = json.loads(manifest.read_text()).get("files", {})
+    except (OSError, ValueError, AttributeError):
+        known = {}
+    for name, text in files.items():
+        (out / name).write_text(text)
+        known[name] = _digest(out / name)
+    manifest.write_text(json.dumps({"written by": "impactgen generate", "files": known}, indent=1) + "\n")
+
+
+def _generate(scene, out: Path, prefix: str, write_scene: bool = False, force: bool = False) -> int:
     from .build import compile_model
     from .codegen.emit import driver_files, generate_model
     from .engines import model_spec
@@ -259,14 +307,14 @@ def _generate(scene, out: Path, prefix: str, write_scene: bool = False) -> int:
     spec = model_spec(scene)
     started = time.perf_counter()
     gen = generate_model(spec, prefix)
+    files = driver_files(gen, scene)
+    if write_scene:
+        files["scene.toml"] = scene.to_toml()
+    _check_out_folder(out, files, force)
     compiled = compile_model(spec)
     elapsed = time.perf_counter() - started
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        for name, text in driver_files(gen, scene).items():
-            (out / name).write_text(text)
-        if write_scene:
-            (out / "scene.toml").write_text(scene.to_toml())
+        _write_generated(out, files)
     except OSError as exc:
         raise SceneError("--out", f"cannot write to {out}: {exc}") from None
     print(f"{spec.slug}: {', '.join(str(out / name) for name in gen.files())} "

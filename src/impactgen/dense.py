@@ -12,7 +12,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from .errors import SceneError
+
 Interpolant = Callable[[np.ndarray], np.ndarray]  # times (m,) -> states (n_states, m)
+
+
+END_SLACK = 4 * np.finfo(float).eps  # relative rounding allowed at the run's two ends
 
 
 class StepPolynomials:
@@ -46,8 +51,14 @@ class DenseSolution:
         Number of states, for an empty solution.
 
     Calling it with a scalar time gives a state vector (n_states,); with an array of times,
-    an array (n_states, len(t)), as `scipy.integrate.OdeSolution` does. Times outside the
-    run are extrapolated from the first or last piece.
+    an array (n_states, len(t)), as `scipy.integrate.OdeSolution` does.
+
+    Raises
+    ------
+    SceneError
+        A time outside the run, [t_min, t_max] (or not a number). This differs from
+        `scipy.integrate.OdeSolution`, which extrapolates its first or last polynomial:
+        outside the run that is no solution at all (q1 = -2.3e10 at t = -1 s).
     """
 
     def __init__(self, breaks: Sequence[float], pieces: Sequence[Interpolant], n_states: int):
@@ -59,11 +70,19 @@ class DenseSolution:
         self.t_min, self.t_max = float(self.breaks[0]), float(self.breaks[-1])
 
     def __call__(self, t: float | np.ndarray) -> np.ndarray:
-        times = np.asarray(t, dtype=float)
+        try:
+            times = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            raise SceneError("t", f"expected a time or an array of times in s, got {t!r:.60}") from None
         flat = np.atleast_1d(times).ravel()
-        out = np.empty((self.n_states, len(flat)))
         if not self.pieces:
-            raise ValueError("this run has no dense output: it ended at its first point")
+            raise SceneError("t", "this run has no dense output: it ended at its first point")
+        slack = END_SLACK * max(1.0, abs(self.t_max))
+        outside = ~((flat >= self.t_min - slack) & (flat <= self.t_max + slack))  # NaN included
+        if outside.any():
+            raise SceneError("t", f"{flat[outside][0]!r} s is outside the run [{self.t_min:.17g}, "
+                                  f"{self.t_max:.17g}] s; dense output does not extrapolate")
+        out = np.empty((self.n_states, len(flat)))
         which = np.clip(np.searchsorted(self.breaks, flat, side="left") - 1, 0, len(self.pieces) - 1)
         for i in np.unique(which):
             mask = which == i
@@ -108,3 +127,13 @@ class TimeSampler:
                     {k: np.empty(0) for k in output_names})
         return (np.concatenate(self.t), np.concatenate(self.y), np.concatenate(self.phase),
                 {k: np.concatenate([o[k] for o in self.outputs]) for k in self.outputs[0]})
+
+
+def dropped_times_warning(requested: int, taken: int, t_end: float) -> list[str]:
+    """The warning for t_eval times after the run's end: they are left out, as solve_ivp
+    leaves them out after a terminal event, but not silently."""
+    if taken >= requested:
+        return []
+    return [f"{requested - taken} of the {requested} t_eval times lie after the run's end at "
+            f"t = {t_end:.6g} s and are left out (the run stops at the first separation unless "
+            "solver.t_end is set)"]

@@ -5,6 +5,7 @@ option that will be refused), and the solver settings override the scene's own.
 """
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -12,10 +13,11 @@ import numpy as np
 from . import phases
 from .build import compile_model
 from .codegen.spec import ModelSpec
+from .dense import dropped_times_warning
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import Scene, with_solver
+from .scene import Scene, load_scene, with_solver
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -39,8 +41,9 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
 
     Parameters
     ----------
-    scene : Scene
-        A checked scene (`load_scene`, `scene_from_dict`).
+    scene : Scene, str or Path
+        A checked scene (`load_scene`, `scene_from_dict`), or a scene file or a shipped
+        example's name, loaded as `load_scene` loads it.
     engine : {"c", "reference"}, default "c"
         "c": the generated C model under SUNDIALS CVODE (built on first use, then cached).
         "reference": the independent pure-Python engine on scipy's solve_ivp.
@@ -60,7 +63,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     t_eval : array_like, optional
         Sorted times in s at which to return the solution (read from the integrator's own
         interpolating polynomial, as solve_ivp does). Times after the run's end (the first
-        separation) are left out. Without it, the samples are every integrator step.
+        separation) are left out, as solve_ivp does after a terminal event, and
+        ``result.warnings`` says how many and when the run ended. Without it, the samples are every integrator step.
     dense_output : bool, default False
         Keep the interpolating polynomials, so that ``result.sol(t)`` gives y at any time
         of the run, across phase switches.
@@ -94,6 +98,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     >>> round(result.summary["delta_r"] * 1e6, 2)       # permanent deformation in um
     5.57
     """
+    if type(scene) is not Scene:
+        scene = _scene_of(scene)
     if unknown:
         name = sorted(unknown)[0]
         raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
@@ -112,10 +118,25 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
                 raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
-        return phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output),
-                          record_steps=bool(record_steps))
-    from . import reference
-    return reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))
+        result = phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output),
+                            record_steps=bool(record_steps))
+    else:
+        from . import reference
+        result = reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))
+    if times is not None and len(result.t) < len(times):  # warnings are made once, then kept
+        result.warnings.extend(dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1])))
+    return result
+
+
+def _scene_of(scene: Any) -> Scene:
+    """simulate()'s first argument as a Scene: a scene file or an example's name is loaded,
+    as load_scene does; anything else is refused in one line."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    raise SceneError("scene", f"simulate() takes a Scene (load_scene, scene_from_dict), a scene file or an "
+                              f"example's name such as 'paper'; got {type(scene).__name__} {scene!r:.60}")
 
 
 def _c_method(method: Any) -> str:

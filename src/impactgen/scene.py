@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import os
 import re
 from collections import abc
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ JACOBIANS = ("auto", "analytic", "difference")
 JACOBIAN_AUTO_MAX_LINKS = 6
 
 _MISSING = object()
+MAX_SCENE_BYTES = 16 * 2**20  # a scene file is a few hundred bytes; /dev/zero would never end
 # A tip (or joint) this far below the surface, relative to the chain's length (at least
 # 1 m), still counts as touching it: the rounding of a height summed over the links (the
 # phase machine's own start test uses the same number).
@@ -118,10 +120,12 @@ class Scene:
             The checked scene. A change that leaves it inconsistent (three links with two
             initial angles, a tip inside the surface) raises `SceneError` naming the key.
         """
+        overrides = checked_overrides(overrides)
         if fields:  # whole fields: the scene they make is read in full
+            _check_fields(self, fields)
             changed = dataclasses.replace(self, **fields)
             return scene_from_dict(changed.to_dict(), overrides, source=self.source)
-        return scene_with(self, overrides or {})
+        return scene_with(self, overrides)
 
     def to_dict(self) -> dict[str, Any]:
         """The scene as nested dicts of plain values, as a TOML file states it (angles in
@@ -270,8 +274,14 @@ def _number(key: str, v: Any, integer: bool = False) -> float | int:
             if not v.is_integer():
                 raise SceneError(key, f"expected an integer, got {v!r}")
             v = int(v)
+        if abs(v) >= 2**63:  # no count is this large; its digits would fill the message
+            raise SceneError(key, f"expected an integer, got one of about {v.bit_length() * 0.30103:.0f} digits")
         return v
-    v = float(v)
+    try:
+        v = float(v)
+    except OverflowError:  # an integer beyond any float (10**400)
+        raise SceneError(key, f"expected a finite number, got an integer of about {v.bit_length() * 0.30103:.0f} "
+                              "digits, beyond what a float holds") from None
     if not math.isfinite(v):
         raise SceneError(key, f"expected a finite number, got {v!r}")
     return v
@@ -347,6 +357,8 @@ def parse_override(text: str) -> tuple[str, Any]:
         raise SceneError("--set", f"missing key in {text!r}")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
+    except RecursionError:
+        raise SceneError(key, "the value is nested too deeply") from None
     except tomllib.TOMLDecodeError:
         if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.-]*", raw):
             value = raw
@@ -401,6 +413,20 @@ def check_values(dotted: str, values: Iterable[Any], links: int) -> None:
     section, key, index = split_key(dotted)
     for value in values:
         _checked_value(dotted, section, key, index, value, links)
+
+
+def checked_overrides(overrides: Any) -> Mapping[str, Any]:
+    """`overrides` if it is a mapping of dotted keys (strings) to values ({} for None);
+    anything else is refused in one line that shows how to write it."""
+    if overrides is None:
+        return {}
+    how = "overrides are a mapping of dotted scene keys to values, e.g. {'rod.E': 2.1e11, 'initial.u[2]': -0.3}"
+    if not isinstance(overrides, abc.Mapping):
+        raise SceneError("overrides", f"{how}; got {type(overrides).__name__} {overrides!r:.60}")
+    bad = next((k for k in overrides if not isinstance(k, str)), None)
+    if bad is not None:
+        raise SceneError("overrides", f"{how}; got the key {bad!r}, which is not a string")
+    return overrides
 
 
 def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
@@ -477,8 +503,11 @@ def _read_sections(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None = None,
                     source: str = "<memory>") -> Scene:
     """Check a scene given as nested dicts (as TOML parses it) and build a `Scene`."""
+    if not isinstance(raw, abc.Mapping):
+        raise SceneError(None, f"a scene is a mapping of tables (as TOML gives it), got {type(raw).__name__} "
+                               f"{raw!r:.60}")
     raw = _tables_copied(raw)
-    _apply_overrides(raw, overrides or {})
+    _apply_overrides(raw, checked_overrides(overrides))
     sections = _read_sections(raw)
 
     def get(section: str, key: str, n: int = 0) -> Any:
@@ -624,6 +653,20 @@ def _with(value: Any, changes: dict[str, Any]) -> Any:
     return type(value)(**{**value.__dict__, **changes})
 
 
+def _check_fields(scene: Scene, fields: Mapping[str, Any]) -> None:
+    """Scene.replace's keyword fields: names of the dataclass, each a value of its field's
+    type (a whole section such as `solver`); a scene key is given in `overrides` instead."""
+    names = [f.name for f in dataclasses.fields(Scene)]
+    for name, value in fields.items():
+        if name not in names:
+            raise SceneError(name, f"Scene.replace takes whole fields ({', '.join(names)}) as keywords; "
+                                   f"a scene key goes in overrides, e.g. scene.replace({{'rod.E': 2.1e11}})")
+        current = getattr(scene, name)
+        if dataclasses.is_dataclass(current) and type(value) is not type(current):
+            raise SceneError(name, f"expected a {type(current).__name__} (e.g. dataclasses.replace(scene.{name}, "
+                                   f"...)), got {type(value).__name__} {value!r:.60}")
+
+
 def joint_heights(scene: Scene) -> list[float]:
     """Heights of the pivot (0), of every joint and of the tip (last), in m, at the start."""
     heights = [0.0]
@@ -696,11 +739,17 @@ def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> 
     (2, (-0.1, -0.3))
     """
     from .examples import example_text, find_example
+    if not isinstance(path, (str, os.PathLike)):
+        raise SceneError(None, f"load_scene takes a scene file (str or Path) or an example's name "
+                               f"such as 'paper', got {type(path).__name__} {path!r:.60}")
     path = Path(path)
     example = find_example(path)
     if example is not None:
         return scene_from_text(example_text(example), overrides, source=f"<example {example}>")
     try:
+        if path.exists() and (not path.is_file() or path.stat().st_size > MAX_SCENE_BYTES):
+            raise SceneError(None, f"{path} is not a scene file: {'too large' if path.is_file() else 'not a file'} "
+                                   f"(a scene is a TOML file of at most {MAX_SCENE_BYTES // 2**20} MiB)")
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise SceneError(None, f"scene file not found: {path} (a shipped example is named without "
@@ -716,6 +765,8 @@ def scene_from_text(text: str, overrides: Mapping[str, Any] | None = None, sourc
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(None, f"{source} is not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib recurses once per nested array or table
+        raise SceneError(None, f"{source} is not a scene: its arrays or tables are nested too deeply") from None
     return scene_from_dict(raw, overrides, source=source)
 
 

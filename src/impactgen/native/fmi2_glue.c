@@ -93,6 +93,14 @@ static int allowed(instance *c, const char *function, int modes)
     say(c, fmi2Error, "logStatusError", "%s is not allowed in this state of the FMU", function);
     return 0;
 }
+/* An array argument that is NULL while its count is not 0 (outside the FMI contract) is an
+ * fmi2Error, not a crash, as in the Reference-FMUs. */
+static int null_array(instance *c, const char *function, size_t n, const void *a, const void *b)
+{
+    if (n == 0 || (a && b)) return 0;
+    say(c, fmi2Error, "logStatusError", "%s: an array argument is NULL", function);
+    return 1;
+}
 #define IN(m) (1 << (m))
 #define SETUP (IN(INSTANTIATED) | IN(INITIALIZATION))
 #define RUNNING (IN(EVENT) | IN(CONTINUOUS) | IN(STEPPING))
@@ -248,6 +256,42 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
     return fmi2OK;
 }
 
+/* The start load_scene refuses (scene.py, _check_physics), by the same rule: a tip inside the
+ * surface, or a pivot or joint below it, by more than the touch tolerance. Logs the variable
+ * and the link and returns 1; 0 for a start on or above the surface. After prepare (p.y_s). */
+static int start_below_surface(instance *c)
+{
+    double length[MODEL_NQ] = {0}, height[MODEL_NQ + 1] = {0}, total = 0.0;
+    char key[32];
+    for (int i = 0; i < MODEL_NQ; ++i) {
+        snprintf(key, sizeof key, "chain.length[%d]", i + 1);
+        for (int k = 0; k < MODEL_NPARAM; ++k) {
+            if (strcmp(model_param_key(k), key) == 0) length[i] = *model_param_slot(&c->p, k);
+        }
+        total += length[i];
+        height[i + 1] = height[i] + length[i] * sin(c->q0[i]);
+    }
+    const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, total), y_s = c->p.y_s, y_tip = height[MODEL_NQ];
+    if (y_s - y_tip > slack) {
+        say(c, fmi2Error, "logStatusError", "surface.height: the tip of link %d starts %.3g m inside the "
+            "surface (tip at y = %.6g m, surface at %.6g m); lower the surface or change initial.q",
+            MODEL_NQ, y_s - y_tip, y_tip, y_s);
+        return 1;
+    }
+    for (int link = 1; link <= MODEL_NQ; ++link) {
+        const double upper = height[link - 1], lower = link < MODEL_NQ ? height[link] : upper;
+        const double low = fmin(upper, lower);  /* the tip itself may touch */
+        if (y_s - low > slack) {
+            say(c, fmi2Error, "logStatusError", "initial.q: link %d starts below the surface: %s is at y = "
+                "%.6g m, the surface at y = %.6g m; every point of the chain must start on or above the "
+                "surface, the tip at most touching it", link, low == upper ? "its pivot end" : "its lower end",
+                low, y_s);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
     instance *c = (instance *)comp;
@@ -255,6 +299,10 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     const char *range = "";
     const int bad = prepare(c, &range);
     if (bad != MODEL_PARAMS_OK) return bad_parameter(c, bad, range);
+    if (start_below_surface(c)) {
+        c->mode = FAILED;
+        return fmi2Error;
+    }
     c->nominals_changed = 0;
 #ifdef FMU_CO_SIMULATION
     if (c->type == fmi2CoSimulation) {
@@ -329,6 +377,7 @@ fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2GetReal", ANY & ~IN(FAILED))) return fmi2Error;
+    if (null_array(c, "fmi2GetReal", nvr, vr, value)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'R');
         if (!v) return fmi2Error;
@@ -341,6 +390,7 @@ fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], siz
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2GetInteger", ANY & ~IN(FAILED))) return fmi2Error;
+    if (null_array(c, "fmi2GetInteger", nvr, vr, value)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'I');
         if (!v) return fmi2Error;
@@ -353,6 +403,7 @@ fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[], siz
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2GetBoolean", ANY & ~IN(FAILED))) return fmi2Error;
+    if (null_array(c, "fmi2GetBoolean", nvr, vr, value)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'B');
         if (!v) return fmi2Error;
@@ -396,6 +447,7 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2SetReal", SETUP)) return fmi2Error;
+    if (null_array(c, "fmi2SetReal", nvr, vr, value)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'R');
         if (!v || set_parameter(c, v, value[k]) != fmi2OK) return fmi2Error;
@@ -415,6 +467,7 @@ fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], siz
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2SetBoolean", SETUP)) return fmi2Error;
+    if (null_array(c, "fmi2SetBoolean", nvr, vr, value)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'B');
         if (!v || set_parameter(c, v, value[k] ? 1.0 : 0.0) != fmi2OK) return fmi2Error;
@@ -505,6 +558,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo *info)
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2NewDiscreteStates", IN(EVENT))) return fmi2Error;
+    if (null_array(c, "fmi2NewDiscreteStates", 1, info, info)) return fmi2Error;
     const int act = handle_events(c, NULL);
     info->newDiscreteStatesNeeded = fmi2False;
     info->terminateSimulation = fmi2False;
@@ -530,6 +584,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
     instance *c = (instance *)comp;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!allowed(c, "fmi2CompletedIntegratorStep", IN(CONTINUOUS))) return fmi2Error;
+    if (null_array(c, "fmi2CompletedIntegratorStep", 1, enterEventMode, terminateSimulation)) return fmi2Error;
     /* an importer that does not locate roots still gets its events at the next step */
     double ev[MODEL_NEVENT];
     int fired[MODEL_NEVENT];
@@ -552,6 +607,7 @@ fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2SetContinuousStates", IN(EVENT) | IN(CONTINUOUS))) return fmi2Error;
+    if (null_array(c, "fmi2SetContinuousStates", nx, x, x)) return fmi2Error;
     if (nx != MODEL_NSTATE) return fail(c, "%s", "fmi2SetContinuousStates: wrong number of states");
     memcpy(c->y, x, sizeof(double) * MODEL_NSTATE);
     return fmi2OK;
@@ -561,6 +617,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2GetDerivatives", RUNNING | IN(INITIALIZATION))) return fmi2Error;
+    if (null_array(c, "fmi2GetDerivatives", nx, derivatives, derivatives)) return fmi2Error;
     if (nx != MODEL_NSTATE) return fail(c, "%s", "fmi2GetDerivatives: wrong number of states");
     if (c->mode == INITIALIZATION) {
         const char *range = "";
@@ -581,6 +638,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real indicators[], siz
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2GetEventIndicators", RUNNING | IN(INITIALIZATION))) return fmi2Error;
+    if (null_array(c, "fmi2GetEventIndicators", ni, indicators, indicators)) return fmi2Error;
     if (ni != MODEL_NEVENT) return fail(c, "%s", "fmi2GetEventIndicators: wrong number of indicators");
     double ev[MODEL_NEVENT];
     int events[MODEL_NEVENT], directions[MODEL_NEVENT];
@@ -595,6 +653,7 @@ fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx)
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2GetContinuousStates", RUNNING | IN(INITIALIZATION) | IN(TERMINATED))) return fmi2Error;
+    if (null_array(c, "fmi2GetContinuousStates", nx, x, x)) return fmi2Error;
     if (nx != MODEL_NSTATE) return fail(c, "%s", "fmi2GetContinuousStates: wrong number of states");
     if (c->mode == INITIALIZATION) {
         const char *range = "";
@@ -609,6 +668,7 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component comp, fmi2Real x_nomi
 {
     instance *c = (instance *)comp;
     if (!c) return fmi2Error;
+    if (null_array(c, "fmi2GetNominalsOfContinuousStates", nx, x_nominal, x_nominal)) return fmi2Error;
     if (nx != MODEL_NSTATE) return fail(c, "%s", "fmi2GetNominalsOfContinuousStates: wrong number of states");
     /* the machine's tolerance scales: 1 for angles and speeds in flight, the impact's own
      * scales inside it (an importer's absolute tolerance is rtol times the nominal) */

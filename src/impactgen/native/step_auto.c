@@ -22,6 +22,10 @@ typedef struct {
     ig_stepper base;
     ig_stepper *first, *second;
     int on_second;   /* the second integrates the segment under way */
+    int to_second;   /* the second takes the segment over at the next step, once the caller
+                      * has read this step's polynomial (the first's) for dense output */
+    double t_hand;   /* ... from this point: the end of the first's last step */
+    double *y_hand;
     long budget;     /* the first's steps in a segment before the second takes over */
     double t_stop;   /* the segment's, for a handover */
     int nevents;
@@ -54,13 +58,16 @@ static void restart(ig_stepper *st)
     a->first->ops->restart(a->first);
     a->second->ops->restart(a->second);
     a->on_second = 0;
+    a->to_second = 0;
     a->nstiff = 0;
 }
 
 static int start(ig_stepper *st, double t0, const double *y0, double t_stop, const int *directions, int nevents)
 {
     auto_stepper *a = (auto_stepper *)st;
+    if (a->to_second) ig_pair_forget_step(a->first);  /* as if the handover had happened */
     a->on_second = 0;
+    a->to_second = 0;
     a->t_stop = t_stop;
     a->nevents = nevents;
     for (int k = 0; k < nevents; ++k) a->dirs[k] = directions[k];
@@ -70,14 +77,25 @@ static int start(ig_stepper *st, double t0, const double *y0, double t_stop, con
 static int step(ig_stepper *st, double *t, double *y, int *roots_found)
 {
     auto_stepper *a = (auto_stepper *)st;
-    if (a->on_second) return a->second->ops->step(a->second, t, y, roots_found);
-    const int flag = a->first->ops->step(a->first, t, y, roots_found);
-    if (flag == IG_STEP_ON && (ig_pair_stiff(a->first) || ig_pair_steps(a->first) >= a->budget)) {
-        /* the second finishes the segment from here; the next segment takes no step from the first's */
-        if (a->second->ops->start(a->second, *t, y, a->t_stop, a->dirs, a->nevents) != 0) return IG_STEP_FAILED;
+    if (a->to_second) {
+        /* The second finishes the segment from here; the next segment takes no step from the
+         * first's. Not at the end of the first's last step: the caller then reads that step's
+         * polynomial, which a freshly started second does not have (CVODE's gave NaN: dense
+         * output and t_eval were NaN over that step). */
+        a->to_second = 0;
+        if (a->second->ops->start(a->second, a->t_hand, a->y_hand, a->t_stop, a->dirs, a->nevents) != 0) {
+            return IG_STEP_FAILED;
+        }
         ig_pair_forget_step(a->first);
         a->on_second = 1;
         a->nstiff++;
+    }
+    if (a->on_second) return a->second->ops->step(a->second, t, y, roots_found);
+    const int flag = a->first->ops->step(a->first, t, y, roots_found);
+    a->to_second = flag == IG_STEP_ON && (ig_pair_stiff(a->first) || ig_pair_steps(a->first) >= a->budget);
+    if (a->to_second) {
+        a->t_hand = *t;
+        memcpy(a->y_hand, y, sizeof(double) * (size_t)st->problem->n);
     }
     return flag;
 }
@@ -109,6 +127,7 @@ static void free_auto(ig_stepper *st)
     if (a->first) a->first->ops->free(a->first);
     if (a->second) a->second->ops->free(a->second);
     free(a->dirs);
+    free(a->y_hand);
     free(a);
 }
 
@@ -121,12 +140,14 @@ ig_stepper *ig_auto_new(ig_stepper *first, ig_stepper *second, char *err, int er
     if (first && second) {  /* (a failed constructor wrote its message into err) */
         a = (auto_stepper *)calloc(1, sizeof *a);
         if (a) a->dirs = (int *)calloc((size_t)first->problem->max_events + 1, sizeof(int));
-        if (!a || !a->dirs) snprintf(err, (size_t)errlen, "out of memory");
+        if (a) a->y_hand = (double *)calloc((size_t)first->problem->n, sizeof(double));
+        if (!a || !a->dirs || !a->y_hand) snprintf(err, (size_t)errlen, "out of memory");
     }
-    if (!a || !a->dirs) {
+    if (!a || !a->dirs || !a->y_hand) {
         if (first) first->ops->free(first);
         if (second) second->ops->free(second);
         if (a) free(a->dirs);
+        if (a) free(a->y_hand);
         free(a);
         return NULL;
     }

@@ -9,11 +9,15 @@ rows with status "failed", so no case is ever missing from the table.
 """
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import gc
 import multiprocessing
+import os
 import signal
 import sys
 import threading
+import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -34,6 +38,9 @@ MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as faile
 AHEAD_PER_WORKER = 2  # chunks sent to a pool per worker at a time: the next is always waiting,
 # and a dead worker leaves only these as suspects (the pool itself holds workers + 1)
 ABANDON_JOIN_S = 5.0  # s to wait for each killed worker of a broken pool
+PARENT_WATCH_S = 1.0  # s between a worker's looks at its parent, where no parent-death signal exists
+PR_SET_PDEATHSIG = 1  # prctl option (linux/prctl.h): a signal for this process when its parent dies
+NOT_FOR_WORKERS: set[int] = set()  # descriptors a forked worker closes (a sweep folder's lock)
 
 Chunk = list[tuple[int, dict[str, Any]]]  # (case index, overrides)
 RunChunk = Callable[[dict[str, Any], Chunk, Any], Any]  # the rows of a chunk, in the caller's form
@@ -93,7 +100,10 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
     from the chunks sent with it, and it alone is tried up to MAX_CHUNK_TRIES times."""
     queue = deque((chunk, 0) for chunk in chunked(todo, workers))  # (chunk, the pools it broke with)
     while queue:
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_start_method(), initializer=_worker_signals)
+        context = _start_method()
+        inherited = tuple(NOT_FOR_WORKERS) if context.get_start_method() == "fork" else ()
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_worker_signals,
+                                   initargs=(inherited,))
         pending: dict[Future, tuple[Chunk, int]] = {}
         broken = finished_normally = False
         try:
@@ -139,12 +149,41 @@ def _may_send(tries: int, pending: Collection[tuple[Chunk, int]], ahead: int) ->
     return not pending if tries else len(pending) < ahead
 
 
-def _worker_signals() -> None:
-    """A worker ends on SIGTERM. A forked worker inherits the command line's SIGTERM handler,
-    which turns the signal into KeyboardInterrupt; the pool would then report that as a result
-    and the worker would live on, so that a broken pool's terminate() never ended it and the
-    pool's shutdown spun waiting for it (the sweep hung at 100 % CPU)."""
+def _worker_signals(inherited: tuple[int, ...] = ()) -> None:
+    """A worker ends on SIGTERM, and when its driver dies; it closes the descriptors of
+    `inherited` (forked from the driver: the lock of the sweep's folder).
+
+    A forked worker inherits the command line's SIGTERM handler, which turns the signal into
+    KeyboardInterrupt; the pool would then report that as a result and the worker would live
+    on, so that a broken pool's terminate() never ended it and the pool's shutdown spun
+    waiting for it (the sweep hung at 100 % CPU). A driver killed with SIGKILL had left its
+    workers running, reparented, and holding the folder's lock, so that the same command
+    could not resume."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    for fd in inherited:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    _end_with_parent()
+
+
+def _end_with_parent() -> None:
+    """SIGTERM for this process when its parent (the driver, or the forkserver that ends
+    with it) dies: Linux's parent-death signal, elsewhere a thread that watches the parent."""
+    parent = os.getppid()
+    libc = ctypes.util.find_library("c") if sys.platform.startswith("linux") else None
+    if libc and ctypes.CDLL(libc, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) == 0:
+        if os.getppid() != parent:  # it died before the signal was asked for
+            os.kill(os.getpid(), signal.SIGTERM)
+        return
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_WATCH_S)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="impactgen-parent-watch", daemon=True).start()
 
 
 def _abandon(pool: ProcessPoolExecutor) -> None:

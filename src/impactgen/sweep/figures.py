@@ -21,15 +21,16 @@ FIELDS = {"delta_r": ("permanent deformation delta_r", "m"), "delta_max": ("maxi
 
 
 def plot_sweep(frame, spec: SweepSpec, out: Path) -> list[Path]:
-    """Write the figures of a sweep's table (and its kept trajectories) into out/figures."""
+    """Write the figures of a sweep's table (and its kept trajectories) into out/_figures."""
     from ..plots import _pyplot
     plt = _pyplot()
-    folder = out / "figures"
+    from .run import FIGURES, TRAJECTORIES
+    folder = out / FIGURES
     folder.mkdir(parents=True, exist_ok=True)
     ok = frame[frame["status"] == "ok"]
     paths: list[Path] = []
-    if (out / "trajectories").is_dir():
-        paths += _kinetic_energy(plt, ok, spec, out / "trajectories", folder)
+    if (out / TRAJECTORIES).is_dir():
+        paths += _kinetic_energy(plt, ok, spec, out / TRAJECTORIES, folder)
     if len(ok) and {"delta_T", "delta_r"} <= set(ok.columns):
         fig, ax = plt.subplots(figsize=(6, 4))
         order = np.argsort(ok["delta_r"].to_numpy())

@@ -28,6 +28,11 @@ from .spec import SweepSpec
 
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
 RESULT_FILE = "sweep.parquet"
+# Everything else in the folder starts with "_" (or "."), which Parquet readers skip
+# (pandas.read_parquet, pyarrow.dataset, dask.dataframe): the folder reads as one dataset,
+# each case once.
+PARTS, STAMP, TRAJECTORIES, FIGURES = "_parts", "_sweep.json", "_trajectories", "_figures"
+OLD_NAMES = {"parts": PARTS, "sweep.json": STAMP, "trajectories": TRAJECTORIES, "figures": FIGURES}  # before 0.2
 
 Progress = Callable[[int], None]  # called with the number of cases just finished
 
@@ -244,20 +249,27 @@ class OutputFolder:
 
     def __init__(self, path: Path, scene: Scene, spec: SweepSpec):
         self.path = path
-        self.parts = path / "parts"
+        self.parts = path / PARTS
         self.meta = {"impactgen.scene": scene.to_toml(), "impactgen.sweep": spec.describe()}
         try:
-            self.parts.mkdir(parents=True, exist_ok=True)
+            path.mkdir(parents=True, exist_ok=True)
             self._lock = open(path / ".lock", "w")
         except OSError as exc:
             raise SceneError("--out", f"cannot use the folder {path}: {exc}") from None
-        try:
+        try:  # a lock on the open file: it ends with the last process holding it (none is a worker)
             fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             self._lock.close()
             raise SceneError("--out", f"another sweep is writing into {path}; wait for it or choose "
                                       "another folder") from None
-        stamp = path / "sweep.json"
+        execute.NOT_FOR_WORKERS.add(self._lock.fileno())
+        try:
+            _rename_old_layout(path)
+            self.parts.mkdir(exist_ok=True)
+        except OSError as exc:
+            self.close()
+            raise SceneError("--out", f"cannot use the folder {path}: {exc}") from None
+        stamp = path / STAMP
         described = {"scene": self.meta["impactgen.scene"], "sweep": spec.describe()}
         if stamp.exists() and json.loads(stamp.read_text()) != described:
             self.close()
@@ -277,7 +289,7 @@ class OutputFolder:
                     self.parts / f"part-{first:09d}-{os.getpid()}-{time.monotonic_ns()}.parquet")
 
     def write_trajectory(self, case: int, columns: dict[str, tuple[np.ndarray, str]]) -> None:
-        folder = self.path / "trajectories"
+        folder = self.path / TRAJECTORIES
         folder.mkdir(exist_ok=True)
         write_parquet(folder / f"case-{case}.parquet", columns, {"case": str(case)})
 
@@ -286,11 +298,32 @@ class OutputFolder:
         table = pa.Table.from_pandas(frame, preserve_index=False)
         path = self.path / RESULT_FILE
         write_table(table.replace_schema_metadata({**(table.schema.metadata or {}), **self.meta}), path)
+        _write_dataset_metadata(path)
         return path
 
     def close(self) -> None:
+        execute.NOT_FOR_WORKERS.discard(self._lock.fileno())
         fcntl.flock(self._lock, fcntl.LOCK_UN)
         self._lock.close()
+
+
+def _write_dataset_metadata(result: Path) -> None:
+    """`_metadata` beside the table, naming it the dataset's only file: dask.dataframe reads
+    a folder's every *.parquet, at any depth (the parts too), unless that file is there."""
+    import pyarrow.parquet as pq
+    footer = pq.read_metadata(result)
+    footer.set_file_path(result.name)
+    temporary = result.with_name("_metadata.tmp")
+    pq.write_metadata(pq.read_schema(result), temporary, metadata_collector=[footer])
+    os.replace(temporary, result.with_name("_metadata"))
+
+
+def _rename_old_layout(path: Path) -> None:
+    """A folder written before the names began with "_" (parts/, sweep.json, ...) takes the
+    new names, so that it resumes and reads as one dataset."""
+    for old, new in OLD_NAMES.items():
+        if (path / old).exists() and not (path / new).exists():
+            (path / old).rename(path / new)
 
 
 def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Path | None = None,

@@ -80,6 +80,9 @@ def parse_axis(text: str) -> Axis:
         count = int(numbers[2])
         if count < 1:
             raise SceneError(key, f"{name}(a,b,n) needs a count n of at least 1, got {count}")
+        if count > MAX_CASES:  # before the grid is made: 1e9 values would fill the memory
+            raise SceneError(key, f"{name}(a,b,n): n = {count} values, more than the limit of {MAX_CASES} "
+                                  "cases in one sweep")
         grid = np.linspace if name == "linspace" else np.logspace
         return Axis(key, tuple(grid(numbers[0], numbers[1], count).tolist()))
     if name in DISTRIBUTIONS:
@@ -94,6 +97,21 @@ def parse_axis(text: str) -> Axis:
                           f"{', '.join(DISTRIBUTIONS)} or a list [a, b, ...]")
 
 
+def _vary_items(vary: Any) -> list[tuple[str | None, Any]]:
+    """`vary` as (KEY, SPEC) pairs, or (None, "KEY=SPEC") for --vary strings; anything else
+    is refused in one line that says how to write it."""
+    how = ("expected vary={KEY: SPEC} (SPEC a list of values, one value, or a string such as "
+           "'linspace(-0.5,-0.1,5)') or a list of 'KEY=SPEC' strings")
+    if isinstance(vary, Mapping):
+        bad = next((k for k in vary if not isinstance(k, str)), None)
+        if bad is not None:
+            raise SceneError("vary", f"a key must be a scene key as a string, got {bad!r}; {how}")
+        return list(vary.items())
+    if isinstance(vary, (list, tuple)) and all(isinstance(v, str) for v in vary):
+        return [(None, v) for v in vary]
+    raise SceneError("vary", f"{how}, got {vary!r:.80}")
+
+
 @dataclass(frozen=True)
 class SweepSpec:
     """The varied keys and how the cases are made from them."""
@@ -104,8 +122,9 @@ class SweepSpec:
 
     @classmethod
     def from_vary(cls, vary: Mapping[str, Any] | list[str], random: int = 0, seed: int = 0) -> "SweepSpec":
-        """From `--vary` strings, or a mapping KEY -> SPEC (a string, or a list of values)."""
-        items = vary.items() if isinstance(vary, Mapping) else [(None, v) for v in vary]
+        """From `--vary` strings, or a mapping KEY -> SPEC (a string, a list of values, or one
+        value: a list of one)."""
+        items = _vary_items(vary)
         axes = []
         for key, spec in items:
             if key is None:
@@ -113,7 +132,8 @@ class SweepSpec:
             elif isinstance(spec, str):
                 axes.append(parse_axis(f"{key}={spec}"))
             else:
-                values = np.asarray(spec).tolist() if hasattr(spec, "tolist") else list(spec)
+                values = np.asarray(spec).tolist() if hasattr(spec, "tolist") else spec
+                values = list(values) if isinstance(values, (list, tuple, range)) else [values]
                 if not values:
                     raise SceneError(key, "no values to vary over")
                 split_key(key)

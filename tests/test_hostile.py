@@ -1,0 +1,159 @@
+"""What a hostile user tried (issue 37): each input must end in a correct result or in one
+clear line of the project's error family, never in a silent wrong answer or a foreign
+exception. docs/safety.md lists the classes and what each gets."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactgen
+from impactgen.errors import ImpactgenError, SceneError
+
+
+# -- 1. silent wrong answers: dense output and t_eval -----------------------------------------
+
+@pytest.fixture(scope="module")
+def bouncing_dense():
+    """The issue's run: its method "auto" hands segments from the explicit pair to BDF."""
+    scene = impactgen.load_scene("bouncing", overrides={"solver.t_end": 5.0})
+    return impactgen.simulate(scene, rtol=1e-8, atol=1e-10, dense_output=True)
+
+
+def test_dense_output_is_finite_where_the_pair_hands_over_to_bdf(bouncing_dense):
+    r = bouncing_dense
+    t = 2.530157208020547  # the end of the pair's last step before BDF took the segment
+    k = int(np.argmin(abs(r.t - t)))
+    assert r.t[k] == t
+    np.testing.assert_allclose(r.sol(t), r.y[:, k], rtol=1e-9, atol=1e-12)
+    times = np.linspace(0.0, r.t[-1], 20001)
+    assert np.isfinite(r.sol(times)).all()
+
+
+def test_dense_output_reproduces_every_step(bouncing_dense):
+    """Each step's polynomial ends at that step's sample: no step is left without one."""
+    r = bouncing_dense
+    np.testing.assert_allclose(r.sol(r.t[1:]), r.y[:, 1:], rtol=1e-7, atol=1e-9)
+
+
+def test_t_eval_around_a_handed_over_step_agrees_with_dense_output(bouncing_dense):
+    r0 = bouncing_dense
+    k = int(np.argmin(abs(r0.t - 2.530157208020547)))
+    ends = r0.t[k - 3:k + 4]
+    times = np.sort(np.concatenate([ends, 0.5 * (ends[1:] + ends[:-1])]))
+    r = impactgen.simulate(r0.scene, rtol=1e-8, atol=1e-10, t_eval=times)
+    assert np.isfinite(r.y).all()
+    np.testing.assert_allclose(r.y, r0.sol(times), rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("engine", ["c", "reference"])
+def test_dense_output_outside_the_run_is_refused(paper_scene, engine):
+    r = impactgen.simulate(paper_scene, engine=engine, dense_output=True)
+    t_final = float(r.t[-1])
+    assert np.isfinite(r.sol(0.0)).all() and np.isfinite(r.sol(t_final)).all()
+    for bad in (-1.0, t_final + 1.0, [0.0, t_final * 2], float("nan"), np.inf, None):
+        with pytest.raises(SceneError, match=r"outside the run \[0, "):
+            r.sol(bad)
+    with pytest.raises(SceneError, match="expected a time"):
+        r.sol("a")
+
+
+@pytest.mark.parametrize("engine", ["c", "reference"])
+def test_t_eval_after_the_end_is_dropped_with_a_warning(paper_scene, engine):
+    r = impactgen.simulate(paper_scene, engine=engine, t_eval=[0.0, 1e-4, 1.0])
+    assert len(r.t) == 2
+    t_final = float(r.trajectory.t[-1])
+    notes = [w for w in r.warnings if "t_eval" in w]
+    assert len(notes) == 1
+    assert "1 of the 3 t_eval times" in notes[0] and f"{t_final:.6g}" in notes[0]
+    full = impactgen.simulate(paper_scene, engine=engine, t_eval=[0.0, 1e-4])
+    assert not [w for w in full.warnings if "t_eval" in w]
+
+
+# -- 3. exceptions that are not ours: each is one line of impactgen.errors -------------------
+
+def _paper():
+    return impactgen.load_scene("paper")
+
+
+ENTRY_CALLS = {  # what a hostile caller passed, and a word of the one line it must get
+    "simulate(None)": (lambda: impactgen.simulate(None), "simulate() takes a Scene"),
+    "simulate({...})": (lambda: impactgen.simulate({"name": "x"}), "simulate() takes a Scene"),
+    "simulate(3)": (lambda: impactgen.simulate(3), "simulate() takes a Scene"),
+    "load_scene(None)": (lambda: impactgen.load_scene(None), "load_scene takes a scene file"),
+    "load_scene(3)": (lambda: impactgen.load_scene(3), "load_scene takes a scene file"),
+    "load_scene(b'paper')": (lambda: impactgen.load_scene(b"paper"), "load_scene takes a scene file"),
+    "overrides rod.E=10**400": (lambda: impactgen.load_scene("paper", overrides={"rod.E": 10**400}),
+                                "beyond what a float holds"),
+    "overrides {1: 2}": (lambda: impactgen.load_scene("paper", overrides={1: 2}), "not a string"),
+    "overrides [(key, value)]": (lambda: impactgen.load_scene("paper", overrides=[("rod.E", 1e11)]),
+                                 "overrides are a mapping"),
+    "overrides 'rod.E=1'": (lambda: impactgen.load_scene("paper", overrides="rod.E=1"), "overrides are a mapping"),
+    "replace('rod.E=1')": (lambda: _paper().replace("rod.E=1"), "overrides are a mapping"),
+    "replace([1, 2])": (lambda: _paper().replace([1, 2]), "overrides are a mapping"),
+    "replace(rod_E=1)": (lambda: _paper().replace(rod_E=1), "a scene key goes in overrides"),
+    "replace(rod=5)": (lambda: _paper().replace(rod=5), "expected a Material"),
+    "replace({'chain.links': 10**400})": (lambda: _paper().replace({"chain.links": 10**400}), "about 400 digits"),
+    "load_scene('/dev/zero')": (lambda: impactgen.load_scene("/dev/zero"), "not a file"),
+    "scene_from_dict(None)": (lambda: impactgen.scene_from_dict(None), "a scene is a mapping"),
+    "sweep(None)": (lambda: impactgen.sweep(None, vary={"initial.u[2]": [-0.3]}), "load_scene takes"),
+}
+
+
+@pytest.mark.parametrize("call", list(ENTRY_CALLS))
+def test_a_hostile_argument_is_one_line_of_our_errors(call):
+    function, words = ENTRY_CALLS[call]
+    with pytest.raises(ImpactgenError) as caught:
+        function()
+    message = str(caught.value)
+    assert words in message and "\n" not in message
+
+
+def test_simulate_takes_an_example_name_as_load_scene_does(paper_scene):
+    by_name = impactgen.simulate("paper")
+    assert by_name.summary["delta_r"] == impactgen.simulate(paper_scene).summary["delta_r"]
+
+
+def _cli(*args, env=None, user=None):
+    import os
+    import subprocess
+    import sys
+    command = [sys.executable, "-m", "impactgen.cli", *args]
+    if user is not None:
+        command = ["setpriv", f"--reuid={user}", f"--regid={user}", "--clear-groups", *command]
+    return subprocess.run(command, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, **(env or {})})
+
+
+def test_a_toml_file_nested_500_deep_is_exit_2(tmp_path):
+    deep = tmp_path / "deep.toml"
+    deep.write_text("x = " + "[" * 500 + "]" * 500 + "\n")
+    res = _cli("run", str(deep))
+    assert res.returncode == 2, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and "nested too deeply" in res.stderr
+    res = _cli("run", "paper", "--set", "rod.E=" + "[" * 500 + "]" * 500)
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+
+
+def test_a_read_only_cache_without_the_model_is_exit_3_naming_the_folder():
+    import os
+    import shutil
+    import sys
+    import tempfile
+    from pathlib import Path
+    user = None
+    if os.geteuid() == 0:  # root writes anywhere: run as nobody
+        if not sys.platform.startswith("linux") or shutil.which("setpriv") is None:
+            pytest.skip("needs setpriv to drop root")
+        user = 65534
+    top = Path(tempfile.mkdtemp(prefix="impactgen-read-only-"))  # reachable by that user (pytest's is not)
+    try:
+        top.chmod(0o755)
+        cache = top / "cache"
+        cache.mkdir(mode=0o555)
+        cache.chmod(0o555)
+        res = _cli("run", "paper", env={"IMPACTGEN_CACHE_DIR": str(cache)}, user=user)
+    finally:
+        shutil.rmtree(top)
+    assert res.returncode == 3, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert str(cache) in res.stderr and "IMPACTGEN_CACHE_DIR" in res.stderr and "lacks this model" in res.stderr
