@@ -54,7 +54,8 @@ def jackson_green_steps(d: sm.Expr = delta) -> tuple[tuple[sm.Symbol, sm.Expr], 
     theta = theta_c w^((1 + B) / 2), theta_c = pi (delta_c / R)^(1/2) 1.9^(-B/2) derived
     once per parameter set (`material_constants`), as is 1/delta_c. Per call that leaves
     one exponential where a took two square roots, an exponential and two divisions:
-    about 8 ns of this costliest right-hand side's 101 (docs/benchmarks.md)."""
+    about 8 ns of this costliest right-hand side's 101 (measured when it was made: the git
+    history of docs/benchmarks.md)."""
     F = sm.Symbol("F")
     return (
         (w, d * inv_delta_c),

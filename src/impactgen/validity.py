@@ -65,7 +65,7 @@ RESOLUTION_MARGIN = 100.0  # delta_max should exceed the tip's positional resolu
 # run. Measured (the budget's residual over its largest term, in units of rtol): 0.004 to 9.4
 # on the bundled scenes at rtol 1e-3 to 1e-10; on the stability catalogue's runs that pass
 # its checks up to 3600 at rtol 1e-8 and 1.5e-7 of the largest term at rtol 1e-11 (5 s runs
-# with sustained contact); 5.4e6 for the stiff friction of docs/model.md under BDF at rtol 1e-8.
+# with sustained contact); 5.4e6 for the stiff friction of docs/stability.md under BDF at rtol 1e-8.
 ENERGY_MARGIN = 1e5
 ENERGY_FLOOR = 1e-6
 
