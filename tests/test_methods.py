@@ -77,7 +77,7 @@ def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
         assert auto.stats["nsteps"] < bdf.stats["nsteps"]
     # (the stuck tip's step counts turn on the last bits where its layer is not resolved: over
     # four starts u2 (1 + k 1e-4) "auto" took 353 to 3374 steps and "bdf" 610 to 3452, each
-    # fewer in some starts; docs/model.md)
+    # fewer in some starts; docs/stability.md)
     assert len(auto.impacts) == len(bdf.impacts)
     assert auto.summary["delta_r"] == pytest.approx(bdf.summary["delta_r"], rel=1e-4)
     # The stuck tip's layer (eps = 1e-10 m/s) is as thin as atol (1e-10): the motion after it is

@@ -214,7 +214,7 @@ def _same(tallied, computed, where=""):
     ("paper", {"initial.u": [0.1, -0.1]}), ("paper", {"surface.height": -2.0, "solver.t_end": 1.0}),
 ])
 def test_the_summaries_tallied_in_c_equal_those_computed_from_the_samples(name, overrides):
-    """The C engine tallies its summaries during the run (cvode_glue.c's ig_summarize); the
+    """The C engine tallies its summaries during the run (tally.c's ig_summarize); the
     same summaries computed in Python from the run's samples and impacts (results.py, as the
     reference engine's are) agree bit for bit: runs to separation and to a time, later
     impacts, sustained contact, friction, a failure, no impact, a run ending in contact."""

@@ -37,7 +37,7 @@ from .sundials import Sundials, find_sundials
 
 # -O3 unrolls and vectorizes the small fixed loops of the explicit pair; -fno-math-errno lets sqrt be
 # one instruction (nothing here reads errno). The paper's impact gives the same numbers to the last
-# digit as at -O2, in about 10 % fewer instructions (docs/benchmarks.md).
+# digit as at -O2, in about 10 % fewer instructions (callgrind, when the flags were chosen).
 COMPILE_ARGS = ("-O3", "-fno-math-errno")
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")

@@ -128,7 +128,7 @@ class Columns(Mapping):
 
 
 class Tallied(NamedTuple):
-    """A summary as the C engine tallied it during the run (cvode_glue.h's ig_summary, field
+    """A summary as the C engine tallied it during the run (tally.h's ig_summary, field
     for field): over the whole run, or over its first impact. NaN where there is nothing to
     report (t_impact, t_sustained)."""
 

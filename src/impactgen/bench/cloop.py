@@ -235,9 +235,8 @@ def _instructions_by_phase(driver: Path, folder: Path, segments: list[tuple[str,
 # Where the C engine's instructions go: the inclusive cost of these functions of the glue,
 # the small kernels and the generated model, against the whole of ig_run.
 COST_PARTS = {  # the generated functions: the integrators' own wrappers may be inlined
-    # model_rhs is model_trig and model_rhs_trig inlined (the pair calls those two itself)
-    "right-hand side": ("model_rhs", "model_rhs_trig", "model_trig"),
-    "event functions (roots)": ("model_events", "model_events_trig"),
+    "right-hand side": ("model_rhs",),
+    "event functions (roots)": ("model_events",),
     "Jacobian": ("model_jacobian",),
     "linear algebra (dense LU)": ("dense_setup", "dense_solve"),
     "phase machine and samples": ("model_machine_switch", "model_machine_observe", "model_machine_events",
