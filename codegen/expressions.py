@@ -127,7 +127,7 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
 
     sign = None
     if spec.has_friction:
-        sign = law.slip if spec.coulomb else law.friction_sign(TIP["v_Bx"])
+        sign = law.slip if spec.coulomb else law.s_frozen if spec.frozen else law.friction_sign(TIP["v_Bx"])
     friction_force = law.friction_force(s.F, sign) if sign is not None else None
 
     d, d_rate = TIP["delta"], TIP["delta_rate"]

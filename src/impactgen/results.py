@@ -17,7 +17,7 @@ import numpy as np
 
 from .dense import DenseSolution
 from .scene import Scene
-from .validity import YieldScale, energy_warning, validity_warnings
+from .validity import YieldScale, energy_warning, frozen_friction_warning, validity_warnings
 
 # The scalar outputs every model computes at each sample (T1..Tn, the kinetic energy per
 # link, come beside them), with their units.
@@ -441,7 +441,15 @@ class SimulationResult:
         else:
             summary = self.summary
             budget = (summary["T0"], summary["Tf"], *(summary["energy"][k] for k in ENERGY_TERMS))
-        return validity_warnings(self.scene, self.impact_records, self.contact) + energy_warning(self.scene, *budget)
+        return (validity_warnings(self.scene, self.impact_records, self.contact) + energy_warning(self.scene, *budget)
+                + self._frozen_friction_warning())
+
+    def _frozen_friction_warning(self) -> list[str]:
+        """friction_mode = "frozen": whether the tip's tangential speed reversed in contact."""
+        if self.scene.contact.friction_mode != "frozen":
+            return []
+        traj = self.trajectory
+        return frozen_friction_warning(self.scene, self.impact_records, traj.t, traj.y)
 
     def impacts_frame(self):
         """The impacts as a pandas DataFrame, one row per impact (units in `IMPACT_UNITS`).
