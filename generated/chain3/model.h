@@ -14,7 +14,13 @@ extern "C" {
 #endif
 
 #define MODEL_NQ 3
-#define MODEL_NSTATE 8
+#define MODEL_NSTATE 10
+/* Where the integrated states sit in y: W_* the works of the contact forces (J), P_* their
+ * impulses (N s). */
+#define MODEL_Y_W_normal 6
+#define MODEL_Y_W_friction 7
+#define MODEL_Y_P_normal 8
+#define MODEL_Y_P_friction 9
 #define MODEL_NTRIG 6  /* trig[2 i] = sin(q_(i+1)), trig[2 i + 1] = cos(q_(i+1)) */
 #define MODEL_NEVENT 5
 #define MODEL_NOUT 13
@@ -89,7 +95,7 @@ typedef struct {
     int phase;  /* MODEL_PHASE_*: which normal-force law is active */
 } model_params;
 
-/* State y = [q1, q2, q3, u1, u2, u3, W_normal, W_friction]; W_* are the works of the contact forces. */
+/* State y = [q1, q2, q3, u1, u2, u3, W_normal, W_friction, P_normal, P_friction]; W_* are the works of the contact forces, P_* their impulses. */
 int model_rhs(double t, const double *y, double *ydot, const model_params *p);
 /* The link angles' sines and cosines, y[0 .. NQ) being the angles; and the right-hand side and
  * events given them, for an integrator that has them at less cost than libm's (the explicit

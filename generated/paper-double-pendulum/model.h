@@ -14,7 +14,13 @@ extern "C" {
 #endif
 
 #define MODEL_NQ 2
-#define MODEL_NSTATE 6
+#define MODEL_NSTATE 8
+/* Where the integrated states sit in y: W_* the works of the contact forces (J), P_* their
+ * impulses (N s). */
+#define MODEL_Y_W_normal 4
+#define MODEL_Y_W_friction 5
+#define MODEL_Y_P_normal 6
+#define MODEL_Y_P_friction 7
 #define MODEL_NTRIG 4  /* trig[2 i] = sin(q_(i+1)), trig[2 i + 1] = cos(q_(i+1)) */
 #define MODEL_NEVENT 5
 #define MODEL_NOUT 12
@@ -86,7 +92,7 @@ typedef struct {
     int phase;  /* MODEL_PHASE_*: which normal-force law is active */
 } model_params;
 
-/* State y = [q1, q2, u1, u2, W_normal, W_friction]; W_* are the works of the contact forces. */
+/* State y = [q1, q2, u1, u2, W_normal, W_friction, P_normal, P_friction]; W_* are the works of the contact forces, P_* their impulses. */
 int model_rhs(double t, const double *y, double *ydot, const model_params *p);
 /* The link angles' sines and cosines, y[0 .. NQ) being the angles; and the right-hand side and
  * events given them, for an integrator that has them at less cost than libm's (the explicit

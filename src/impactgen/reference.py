@@ -214,7 +214,8 @@ class ReferenceModel:
         F = self.contact.normal_force(phase, self.contact.y_s - y_B)
         F_f = self.tangential_force(y, phase, F, v_Bx)
         works = [F * v_By] + ([F_f * v_Bx] if self.friction_state else [])
-        return np.concatenate([self.chain_rates(t, y, F, F_f), works])
+        impulses = [F] + ([F_f] if self.friction_state else [])  # P_normal[, P_friction]
+        return np.concatenate([self.chain_rates(t, y, F, F_f), works, impulses])
 
     def stuck(self, phase: str) -> bool:
         return self.contact.exact_coulomb and self.contact.slip == 0 and phase != "free"
@@ -422,7 +423,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     n = scene.n
     rtol = scene.solver.rtol if rtol is None else rtol
     atol_q = scene.solver.atol if atol is None else atol
-    nstate = 2 * n + (2 if model.friction_state else 1)
+    n_works = 2 if model.friction_state else 1
+    nstate = 2 * n + 2 * n_works  # q, u, the works, the impulses
     energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
     atol_vec = np.full(nstate, atol_q)
     atol_vec[2 * n:] = atol_q * energy_scale
@@ -520,6 +522,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
                     impact.delta_max = delta_m
                     impact.P_max = model.contact.normal_force(phase, delta_m)
                     impact.delta_r, impact.R_res = model.contact.delta_r, model.contact.R_res
+                    impact.i_max = rec.count - 1
                 impact.switches.append((t, phase, new))
                 if new == "free":
                     impact.t_end, impact.i_end = t, rec.count - 1
