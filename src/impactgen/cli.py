@@ -543,6 +543,16 @@ def _impacts_table(result) -> list[str]:
     return lines
 
 
+def _coefficient_lines(c: dict) -> list[str]:
+    """The impact's coefficients of restitution and impulses (docs/impact-laws.md), once it ended."""
+    if c["e_N"] is None:
+        return []
+    return [f"  restitution       e_N = {c['e_N']:.5f}, e_P = {c['e_P']:.5f}, e_E = {c['e_E']:.5f} "
+            f"(v_n0 = {c['v_n0']:.4g} m/s; impactgen compare: the rigid-body laws)",
+            f"  impulses          P_c = {c['P_c']:.5g} N s, P_r = {c['P_r']:.5g} N s, P_t = {c['P_t']:.5g} N s, "
+            f"friction's share of the loss {c['friction_share']:.3f}"]
+
+
 def format_summary(result) -> str:
     """The text `impactgen run` prints: the first impact, then the whole run if it went on."""
     first, run = result.first_impact, result.summary
@@ -563,6 +573,7 @@ def format_summary(result) -> str:
             f"W_gravity = {e['W_gravity']:.4g} J, residual = {e['residual']:.2g} J",
             "  speeds after      u = [" + ", ".join(f"{v:.6g}" for v in s["u_final"]) + "] rad/s",
         ]
+        lines += _coefficient_lines(s["coefficients"])
         if s["stick_slip"]:
             lines.append("  stick-slip        " + ", ".join(f"{w['from']} -> {w['to']} at {w['t']:.9g} s"
                                                          for w in s["stick_slip"]))
