@@ -130,8 +130,8 @@ def test_bad_law_input_is_one_clear_error():
     chain = RigidChain((1.0,), (1.0,))
     with pytest.raises(ImpactgenError, match="unknown impact law"):
         solve_impact(chain, [-0.5], [-1.0], "hooke", 0.5, 0.0)
-    with pytest.raises(ImpactgenError, match=r"\[0, 1\]"):
-        solve_impact(chain, [-0.5], [-1.0], "newton", 1.5, 0.0)
+    with pytest.raises(ImpactgenError, match=">= 0"):
+        solve_impact(chain, [-0.5], [-1.0], "newton", -0.5, 0.0)
     with pytest.raises(ImpactgenError, match="does not approach"):
         solve_impact(chain, [-0.5], [1.0], "poisson", 0.5, 0.0)
     assert set(LAWS) == {"newton", "poisson", "energetic"}

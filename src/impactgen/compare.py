@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ImpactgenError, SolverError
+from .errors import ImpactgenError, SceneError, SolverError
 from .impact_laws import LAWS, RigidChain, solve_impact
 from .results import SimulationResult
 from .scene import Scene
@@ -26,8 +26,8 @@ GAIN_TOLERANCE = 1e-12  # an energy change above this fraction of T_before count
 def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
     """The rows of the comparison for the first impact of a compliant run (see `compare_laws`)."""
     if not result.impacts or result.impacts[0].i_end is None:
-        raise SolverError("the run has no finished impact to compare the rigid laws with"
-                          + (f": {result.message}" if result.message else ""))
+        raise SceneError("initial", "the run has no finished impact to compare the rigid laws with"
+                         + (f": {result.message}" if result.message else ""))
     scene, n = result.scene, result.n
     impact = result.impacts[0]
     y = result.trajectory.y
@@ -44,7 +44,7 @@ def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
         name = LAW_COEFFICIENT[law]
         e = coefficients[name]
         try:
-            out = solve_impact(chain, q0, u0, law, min(max(e, 0.0), 1.0), scene.contact.friction)
+            out = solve_impact(chain, q0, u0, law, e, scene.contact.friction)
         except ImpactgenError as exc:
             row = _row(law, name, e, np.full(n, math.nan), u_compliant, (math.nan, math.nan), math.nan, math.nan,
                        math.nan, math.nan)

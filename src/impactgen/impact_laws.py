@@ -112,7 +112,9 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
         Link angles (rad, from +x) and speeds (rad/s) at the instant of impact.
     law : {"newton", "poisson", "energetic"}
     e : float
-        The law's coefficient of restitution, in [0, 1].
+        The law's coefficient of restitution, >= 0: at most 1 for a rigid impact, though a
+        compliant impact's e_N and e_P can exceed 1 where friction and the chain's motion
+        act during the contact (`impactgen compare` passes them on as they are).
     mu : float
         Coulomb's friction coefficient, >= 0.
 
@@ -123,14 +125,14 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
     Raises
     ------
     ImpactgenError
-        For an unknown law, a coefficient outside [0, 1], a tip that does not approach the
+        For an unknown law, a negative coefficient, a tip that does not approach the
         surface, or a contact that jams (friction stops the normal motion from ever
         reversing: Painleve's paradox).
     """
     if law not in LAWS:
         raise ImpactgenError(f"unknown impact law {law!r}: use one of {', '.join(LAWS)}")
-    if not (0.0 <= e <= 1.0) or not math.isfinite(e):
-        raise ImpactgenError(f"the {law} coefficient of restitution must lie in [0, 1], got {e!r}")
+    if not (e >= 0.0 and math.isfinite(e)):
+        raise ImpactgenError(f"the {law} coefficient of restitution must be a number >= 0, got {e!r}")
     if mu < 0 or not math.isfinite(mu):
         raise ImpactgenError(f"the friction coefficient must be >= 0, got {mu!r}")
     q, u = np.asarray(q, dtype=float), np.asarray(u, dtype=float)
