@@ -25,6 +25,7 @@ mu = sm.Symbol("mu", nonnegative=True)  # friction coefficient
 eps = sm.Symbol("eps", positive=True)  # regularization speed of the friction sign
 slip = sm.Symbol("slip")  # exact Coulomb: +1 or -1 while slipping, 0 while stuck (phase machine)
 v_Bx = sm.Symbol("v_Bx")  # tangential tip velocity
+s_frozen = sm.Symbol("s_frozen")  # frozen friction: the sign of v_Bx at contact start (phase machine)
 
 YIELD_ONSET = sm.nsimplify(THRESHOLD["YIELD_ONSET"])  # phase I ends at delta = 19/10 delta_c, exactly
 

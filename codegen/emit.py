@@ -266,7 +266,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     if spec.constrained:
         rhs_blocks += [tip_jacobian]
     found = {sm.Symbol(k): sm.Symbol(f"c.{k}") for k in ("F", "F_f", "v_Bx", "v_By")}  # tip_forces c
-    works = [(f"ydot[{2 * n + k}]", ccode(w.expr.xreplace(found)), w.doc) for k, w in enumerate(model.works)]
+    works = [(f"ydot[{2 * n + k}]", ccode(sm.sympify(w.expr).xreplace(found)), w.doc)
+             for k, w in enumerate(model.integrals)]
 
     # Events: only delta and its rate are needed.
     ev_tip = tip_block(["delta", "delta_rate"])

@@ -82,6 +82,14 @@ class ModelExpressions:
     works: tuple[Named, ...]  # power of each contact force: integrated as extra states
     params: tuple[Field, ...]  # the parameter struct, in order (codegen/parameters.py)
     jacobian: JacobianExpressions | None = None
+    # each contact force itself, integrated as states after the works: the impulses
+    # P_normal[, P_friction] that the impact coefficients are made of (docs/model.md section 9)
+    impulses: tuple[Named, ...] = ()
+
+    @property
+    def integrals(self) -> tuple[Named, ...]:
+        """What is integrated beside q and u, in the state's order: the works, the impulses."""
+        return self.works + self.impulses
 
     @property
     def phases(self) -> tuple[str, ...]:
@@ -92,7 +100,8 @@ class ModelExpressions:
     @property
     def state_names(self) -> tuple[str, ...]:
         s = self.chain.symbols
-        return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works)
+        return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works) + tuple(
+            p.name for p in self.impulses)
 
 
 @lru_cache(maxsize=32)
@@ -127,7 +136,7 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
 
     sign = None
     if spec.has_friction:
-        sign = law.slip if spec.coulomb else law.friction_sign(TIP["v_Bx"])
+        sign = law.slip if spec.coulomb else law.s_frozen if spec.frozen else law.friction_sign(TIP["v_Bx"])
     friction_force = law.friction_force(s.F, sign) if sign is not None else None
 
     d, d_rate = TIP["delta"], TIP["delta_rate"]
@@ -162,6 +171,9 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     works = [Named("normal", s.F * TIP["v_By"], "power of the normal force, W")]
     if spec.has_friction:
         works.append(Named("friction", s.F_f * TIP["v_Bx"], "power of the friction force, W"))
+    impulses = [Named("P_normal", s.F, "normal force: its integral is the normal impulse, N")]
+    if spec.has_friction:
+        impulses.append(Named("P_friction", s.F_f, "friction force: its integral is the tangential impulse, N"))
 
     used: set[sm.Symbol] = set(machine_symbols(spec))
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
@@ -169,10 +181,10 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     params = fields(spec.links, spec.friction_law, {str(x) for x in used})
 
     forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
-    jacobian = _jacobian(chain, forcing, tuple(cases), friction_force, tuple(works)) if spec.jacobian else None
+    jacobian = _jacobian(chain, forcing, tuple(cases), friction_force, tuple(works + impulses)) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign,
                             _tip_jacobian(chain) if spec.constrained else (), tuple(events),
-                            tuple(outputs), tuple(works), params, jacobian)
+                            tuple(outputs), tuple(works), params, jacobian, tuple(impulses))
 
 
 def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:
@@ -217,8 +229,12 @@ def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase,
             dM_udot = sum(M[i, k].diff(v) * udot[k] for k in range(n)) if j < n else 0
             G[i, j] = forcing[i].diff(v) + df_dF * dF_dy[j] + df_dFf * dFf_dy[j] - dM_udot
     rows = []
-    for w in works:  # power of each contact force: F v_By, F_f v_Bx
-        if w.name == "normal":
+    for w in works:  # power of each contact force: F v_By, F_f v_Bx; the forces themselves (impulses)
+        if w.name == "P_normal":
+            rows.append(list(dF_dy))
+        elif w.name == "P_friction":
+            rows.append(list(dFf_dy))
+        elif w.name == "normal":
             rows.append([a * TIP["v_By"] + s.F * v_By.diff(v) for a, v in zip(dF_dy, y)])
         else:
             rows.append([a * TIP["v_Bx"] + s.F_f * v_Bx.diff(v) for a, v in zip(dFf_dy, y)])

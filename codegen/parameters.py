@@ -30,7 +30,7 @@ class Parameter:
     unit: str
     doc: str
     kind: str  # "input" | "derived" | "machine"
-    needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "used"
+    needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "frozen" | "used"
     per_link: bool = False
     read: Callable[[Any], Any] | None = None  # the value from a scene (a per-link row: the tuple of the links')
     low: float = -INF  # physical range of an input, for the C check (fmi2SetReal)
@@ -119,6 +119,8 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("R_res", "", "m", "unloading radius (set at maximum compression)", "machine", needs="used"),
     Parameter("slip", "", "1", "exact Coulomb: +1 or -1 while the tip slips that way, 0 while it sticks",
               "machine", needs="coulomb"),
+    Parameter("s_frozen", "", "1", "frozen friction: the sign of the tip's tangential speed at contact start, "
+              "kept for the whole contact", "machine", needs="frozen"),
 )
 
 BY_NAME = {p.name: p for p in PARAMETERS}
@@ -130,7 +132,7 @@ def included(p: Parameter, friction_law: str, used: set[str]) -> bool:
         return True
     if p.needs == "friction":
         return friction_law != "none"
-    if p.needs in ("regularized", "coulomb"):
+    if p.needs in ("regularized", "coulomb", "frozen"):
         return friction_law == p.needs
     return p.name in used
 
@@ -169,7 +171,7 @@ def markdown_table() -> str:
         name = f"{p.name}1..{p.name}n" if p.per_link else p.name
         key = p.key.replace("{i}", "i") if p.key else ""
         when = {"always": "", "friction": " (with friction)", "regularized": " (regularized friction)",
-                "coulomb": "", "used": ""}[p.needs]
+                "coulomb": "", "frozen": "", "used": ""}[p.needs]
         rows.append(f"| `{name}` | {f'`{key}`' if key else ''} | {p.unit if p.unit not in ('', '1') else '-'} | "
                     f"{kinds[p.kind]} | {p.range_text()} | {p.doc.replace('{i}', 'i')}{when} |")
     return "\n".join(rows)

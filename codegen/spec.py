@@ -11,7 +11,7 @@ from dataclasses import asdict, dataclass
 # Phases of MODEL.md section 4, as the C enum values, and the sustained contact that ends a
 # chattering sequence of impacts (the tip held on the surface by a constraint force).
 PHASES = ("free", "elastic", "elastoplastic", "restitution", "sustained")
-FRICTION_KINDS = ("none", "regularized", "coulomb")
+FRICTION_KINDS = ("none", "regularized", "coulomb", "frozen")
 
 # Machine states: contact phases, plus reloading (restitution's law, watching delta_m).
 STATES = ("free", "elastic", "elastoplastic", "restitution", "reloading", "sustained")
@@ -25,7 +25,7 @@ class ModelSpec:
 
     links: int
     contact_model: str = "three-phase"  # "three-phase" | "hertz"
-    friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip)
+    friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip) | "frozen"
     jacobian: bool = False  # emit the analytic Jacobian (for BDF)
     sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
 
@@ -44,6 +44,11 @@ class ModelSpec:
     @property
     def coulomb(self) -> bool:
         return self.friction_law == "coulomb"
+
+    @property
+    def frozen(self) -> bool:
+        """Friction keeps the direction it had at contact start (the paper's published losses)."""
+        return self.friction_law == "frozen"
 
     @property
     def constrained(self) -> bool:

@@ -23,12 +23,12 @@ def bouncing():
 def test_shapes_follow_solve_ivp(paper_result):
     r = paper_result
     n_points = len(r.t)
-    assert r.y.shape == (2 * r.n + 2, n_points)  # q, u, W_normal, W_friction
+    assert r.y.shape == (2 * r.n + 4, n_points)  # q, u, W_normal, W_friction, P_normal, P_friction
     assert r.q.shape == (2, n_points) and r.u.shape == (2, n_points)
     assert r.v_B.shape == (2, n_points) and r.T_links.shape == (2, n_points)
     assert r.delta.shape == r.F.shape == r.T.shape == (n_points,)
     np.testing.assert_array_equal(r.q[:, 0], r.scene.q0)
-    assert r.state_names == ["q1", "q2", "u1", "u2", "W_normal", "W_friction"]
+    assert r.state_names == ["q1", "q2", "u1", "u2", "W_normal", "W_friction", "P_normal", "P_friction"]
     for name in ("delta", "F", "F_f", "v_B", "T_links", "x_B", "v_Bx", "T", "V", "outputs"):
         assert name in dir(r)
     assert set(r.outputs) >= {"delta", "F", "F_f", "T1", "T2", "T", "V"}
@@ -44,11 +44,13 @@ def test_summary_is_computed_once_with_plain_floats(paper_result):
 def test_summary_keys_are_in_the_order_a_sweep_writes_its_columns(paper_result, bouncing):
     """The sweep names its columns from results' key lists; both engines' summaries, of an
     impact and of a whole run, follow them."""
-    from impactgen.results import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
-    expected = [*SUMMARY_LEADING, "switches", "stick_slip", "u_final", "q_final", *SUMMARY_LATER, "energy"]
+    from impactgen.results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
+    expected = [*SUMMARY_LEADING, "switches", "stick_slip", "u_final", "q_final", *SUMMARY_LATER, "energy",
+                "coefficients"]
     reference = impactgen.simulate(paper_result.scene, engine="reference")
     for summary in (paper_result.summary, reference.summary, bouncing.summary):
         assert list(summary) == expected and list(summary["energy"]) == list(ENERGY_TERMS)
+        assert list(summary["coefficients"]) == list(COEFFICIENTS)
 
 
 def test_a_tallied_summary_gives_each_field_to_its_key():
@@ -123,9 +125,9 @@ def test_t_eval_samples_agree_with_the_dense_solution(paper_scene):
     times = np.linspace(0.0, 4.0e-4, 41)
     r = impactgen.simulate(paper_scene, t_eval=times, dense_output=True)
     np.testing.assert_array_equal(r.t, times)
-    assert r.y.shape == (6, 41) and len(r.phase) == 41 and r.F.shape == (41,)
+    assert r.y.shape == (8, 41) and len(r.phase) == 41 and r.F.shape == (41,)
     np.testing.assert_allclose(r.sol(times), r.y, rtol=0, atol=1e-15)
-    assert r.sol(1e-4).shape == (6,)
+    assert r.sol(1e-4).shape == (8,)
     assert set(r.phase) == {"elastic", "elastoplastic", "restitution"}
     # the summary still comes from every step, not from the 41 samples
     assert r.summary["delta_r"] == pytest.approx(5.57e-6, rel=2e-3)
@@ -144,7 +146,7 @@ def test_reference_engine_takes_the_same_options(paper_scene):
     times = np.linspace(0.0, 4.0e-4, 5)
     r = impactgen.simulate(paper_scene, engine="reference", method="lsoda", rtol=1e-8, atol=1e-10,
                            t_eval=times, dense_output=True)
-    assert r.stats["method"] == "LSODA" and r.y.shape == (6, 5)
+    assert r.stats["method"] == "LSODA" and r.y.shape == (8, 5)
     c = impactgen.simulate(paper_scene, rtol=1e-8, atol=1e-10, t_eval=times)
     np.testing.assert_allclose(r.q, c.q, atol=1e-8)
     np.testing.assert_allclose(r.sol(times), r.y, atol=1e-15)

@@ -67,7 +67,7 @@ def test_pruned_scene_generates_no_friction_and_no_plastic_code():
         assert not re.search(rf"\b{absent}\b", code), absent
         assert re.search(rf"\b{absent}\b", full), absent
     assert "mu" not in pruned.param_names and "R_res" not in pruned.param_names
-    assert pruned.state_names == ("q1", "q2", "u1", "u2", "W_normal")
+    assert pruned.state_names == ("q1", "q2", "u1", "u2", "W_normal", "P_normal")
 
 
 @needs_cc
@@ -100,7 +100,7 @@ def test_model_embeds_in_a_plain_c_program(tmp_path):
             p.L1 = 1.0; p.L2 = 1.0; p.m1 = 1.0; p.m2 = 1.0; p.g = 9.81; p.y_s = -1.7735;
             p.E_star = 1.15e11; p.R = 0.005; p.mu = 0.2; p.eps = 1e-6;
             p.phase = MODEL_PHASE_ELASTIC;
-            const double y[MODEL_NSTATE] = {-1.2, -1.0, -0.1, -0.2, 0.0, 0.0};
+            const double y[MODEL_NSTATE] = {-1.2, -1.0, -0.1, -0.2, 0.0, 0.0, 0.0, 0.0};
             double ydot[MODEL_NSTATE];
             if (model_rhs(0.0, y, ydot, &p) != 0) return 1;
             for (int k = 0; k < MODEL_NSTATE; ++k) printf("%.17g\\n", ydot[k]);
@@ -119,8 +119,8 @@ def test_model_embeds_in_a_plain_c_program(tmp_path):
                      mu=0.2, eps=1e-6).items():
         setattr(p, k, v)
     p.phase = model.lib.MODEL_PHASE_ELASTIC
-    y = model.ffi.new("double[]", [-1.2, -1.0, -0.1, -0.2, 0.0, 0.0])
-    ydot = model.ffi.new("double[]", 6)
+    y = model.ffi.new("double[]", [-1.2, -1.0, -0.1, -0.2, 0.0, 0.0, 0.0, 0.0])  # q, u, works, impulses
+    ydot = model.ffi.new("double[]", 8)
     assert model.lib.model_rhs(0.0, y, ydot, p) == 0
     assert np.array_equal(standalone, np.array(list(ydot)))
     assert standalone[4] != 0.0  # the tip is ~1e-5 m into the surface: the normal force works

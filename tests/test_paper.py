@@ -63,7 +63,12 @@ def test_link_one_gains_and_link_two_loses_kinetic_energy(paper_result):
 
 
 def test_force_is_continuous_at_maximum_compression(paper_result):
+    """The force on either side of the switch, at the same instant up to 1e-9 of it (the
+    first restitution step's sample is a step later: the force has moved on by about 1e-3
+    there, with the step the integrator happens to choose)."""
     r = paper_result
-    i = np.flatnonzero(r.phase == "elastoplastic")[-1]  # the switch sample
-    after = np.flatnonzero(r.phase == "restitution")[0]
-    assert r.F[after] == pytest.approx(r.F[i], rel=1e-3)
+    t_switch = r.t[np.flatnonzero(r.phase == "elastoplastic")[-1]]  # the switch sample
+    around = impactgen.simulate(r.scene, t_eval=[t_switch * (1 - 1e-9), t_switch * (1 + 1e-9)])
+    assert list(around.phase) == ["elastoplastic", "restitution"]
+    assert around.F[1] == pytest.approx(around.F[0], rel=1e-6)
+    assert around.F[0] == pytest.approx(r.summary["P_max"], rel=1e-6)

@@ -133,7 +133,7 @@ def test_c_and_reference_right_hand_sides_agree(case):
     scene, phase, delta_m = case
     n = scene.n
     works = 2 if scene.contact.friction > 0 else 1
-    y = np.concatenate([scene.q0, scene.u0, np.zeros(works)])
+    y = np.concatenate([scene.q0, scene.u0, np.zeros(2 * works)])  # the works, the impulses
     c, ref = crosscheck.rhs_pair(scene, phase, y, delta_m)
     assert np.max(np.abs(c[:2 * n] - ref[:2 * n])) <= 1e-12 * np.max(np.abs(ref[:2 * n]))
     assert np.max(np.abs(c[2 * n:] - ref[2 * n:])) <= 1e-12 * max(np.max(np.abs(ref[2 * n:])), 1e-300)

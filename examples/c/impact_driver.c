@@ -124,7 +124,9 @@ int main(int argc, char **argv)
     for (int i = 0; i < MODEL_NQ; ++i) printf("q_final[%d] %.17g\n", i + 1, sum->y_final[i]);
     for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, sum->y_final[MODEL_NQ + i]);
     printf("W_normal %.17g\n", sum->W_normal);
-    if (MODEL_NSTATE > 2 * MODEL_NQ + 1) printf("W_friction %.17g\n", sum->W_friction);
+#ifdef MODEL_Y_W_friction
+    printf("W_friction %.17g\n", sum->W_friction);
+#endif
     printf("W_gravity %.17g\n", sum->W_gravity);
     printf("steps %ld\n", stats.nsteps);
     ig_solver_free(s);

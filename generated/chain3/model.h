@@ -14,7 +14,13 @@ extern "C" {
 #endif
 
 #define MODEL_NQ 3
-#define MODEL_NSTATE 8
+#define MODEL_NSTATE 10
+/* Where the integrated states sit in y: W_* the works of the contact forces (J), P_* their
+ * impulses (N s). */
+#define MODEL_Y_W_normal 6
+#define MODEL_Y_W_friction 7
+#define MODEL_Y_P_normal 8
+#define MODEL_Y_P_friction 9
 #define MODEL_NEVENT 5
 #define MODEL_NOUT 13
 #define MODEL_HAS_JACOBIAN 1
@@ -88,7 +94,7 @@ typedef struct {
     int phase;  /* MODEL_PHASE_*: which normal-force law is active */
 } model_params;
 
-/* State y = [q1, q2, q3, u1, u2, u3, W_normal, W_friction]; W_* are the works of the contact forces. */
+/* State y = [q1, q2, q3, u1, u2, u3, W_normal, W_friction, P_normal, P_friction]; W_* are the works of the contact forces, P_* their impulses. */
 int model_rhs(double t, const double *y, double *ydot, const model_params *p);
 double model_normal_force(double delta, const model_params *p);
 void model_events(double t, const double *y, double *ev, const model_params *p);

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define MODEL_API_VERSION 1
-#define MODEL_STRUCTURE_HASH "d3c603d9ec17bdc5"
+#define MODEL_STRUCTURE_HASH "3af3597e96dec7fc"
 
 /* Thresholds of the machine (codegen/machine.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */

@@ -237,6 +237,8 @@ static int rhs_given_trig(double t, const double *y, const double *trig, double 
     ydot[1] = y[3];
     ydot[4] = c.F*c.v_By;  /* power of the normal force, W */
     ydot[5] = c.F_f*c.v_Bx;  /* power of the friction force, W */
+    ydot[6] = c.F;  /* normal force: its integral is the normal impulse, N */
+    ydot[7] = c.F_f;  /* friction force: its integral is the tangential impulse, N */
     double not_finite = 0.0;  /* 0 * x is 0 for a finite x and NaN for an infinite or NaN one */
     for (int k = 0; k < MODEL_NSTATE; ++k) not_finite += 0.0 * ydot[k];
     return isnan(not_finite) ? 1 : 0;
@@ -396,7 +398,7 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     const double udot2 = f[1];
     /* G = df/dy - (dM/dy) du/dt (total derivatives through F and F_f); Jw: the works */
     double G[8];
-    double Jw[8];
+    double Jw[16];
     const double jac0 = L1*sin_q1;
     const double jac1 = g*jac0;
     const double jac2 = (L1*L1);
@@ -414,44 +416,54 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     const double jac14 = (1.0/2.0)*m2;
     const double jac15 = jac14*jac5;
     const double jac16 = L1*cos_q1;
-    const double jac17 = (v_Bx*v_Bx);
-    const double jac18 = (eps*eps) + jac17;
-    const double jac19 = (1.0/sqrt(jac18));
-    const double jac20 = dF*jac19*mu*v_Bx;
-    const double jac21 = F*mu;
-    const double jac22 = jac17*jac21/(jac18*sqrt(jac18)) - jac19*jac21;
-    const double jac23 = jac16*jac20 - jac16*jac22*u1;
-    const double jac24 = dF*jac5*jac9;
-    const double jac25 = -jac6;
-    const double jac26 = jac15*jac25;
-    const double jac27 = L2*cos_q2;
-    const double jac28 = jac20*jac27 - jac22*jac27*u2;
-    const double jac29 = L2*u2;
-    const double jac30 = jac10*jac22*jac5;
-    const double jac31 = (u1*u1);
-    const double jac32 = L2*sin_q2;
-    const double jac33 = (L2*L2);
-    const double jac34 = F*sin_q2;
-    const double jac35 = F_f*cos_q2;
-    const double jac36 = L1*u1;
-    const double jac37 = dF*v_By;
-    const double jac38 = jac22*v_Bx;
-    G[0] = L1*(-jac3 - jac4) - (cos_q1*cos_q1)*dF*jac2 - jac0*jac23 + (1.0/2.0)*jac1*m1 + jac1*m2 + jac12*jac13*jac15 - jac8*udot2;
-    G[1] = (1.0/2.0)*L1*L2*jac11*jac13*m2 - jac0*jac28 - jac24 - jac26*udot2;
-    G[2] = jac2*jac22*(sin_q1*sin_q1);
-    G[3] = L1*jac29*jac7 + jac30;
-    G[4] = (1.0/2.0)*L1*L2*jac11*jac31*m2 - jac23*jac32 - jac24 - jac8*udot1;
-    G[5] = L2*(-jac34 - jac35) - (cos_q2*cos_q2)*dF*jac33 + g*jac14*jac32 + jac12*jac15*jac31 - jac26*udot1 - jac28*jac32;
-    G[6] = L2*jac25*jac36*m2 + jac30;
-    G[7] = jac22*jac33*(sin_q2*sin_q2);
-    Jw[0] = -jac16*jac37 - jac3*jac36;
-    Jw[1] = -jac27*jac37 - jac29*jac34;
+    const double jac17 = dF*jac16;
+    const double jac18 = (v_Bx*v_Bx);
+    const double jac19 = (eps*eps) + jac18;
+    const double jac20 = (1.0/sqrt(jac19));
+    const double jac21 = jac20*mu*v_Bx;
+    const double jac22 = F*mu;
+    const double jac23 = jac18*jac22/(jac19*sqrt(jac19)) - jac20*jac22;
+    const double jac24 = -jac16*jac23*u1 + jac17*jac21;
+    const double jac25 = dF*jac5*jac9;
+    const double jac26 = -jac6;
+    const double jac27 = jac15*jac26;
+    const double jac28 = L2*cos_q2;
+    const double jac29 = dF*jac28;
+    const double jac30 = jac21*jac29 - jac23*jac28*u2;
+    const double jac31 = L2*u2;
+    const double jac32 = jac10*jac23*jac5;
+    const double jac33 = (u1*u1);
+    const double jac34 = L2*sin_q2;
+    const double jac35 = (L2*L2);
+    const double jac36 = F*sin_q2;
+    const double jac37 = F_f*cos_q2;
+    const double jac38 = L1*u1;
+    const double jac39 = jac0*jac23;
+    const double jac40 = jac23*jac34;
+    G[0] = L1*(-jac3 - jac4) - (cos_q1*cos_q1)*dF*jac2 - jac0*jac24 + (1.0/2.0)*jac1*m1 + jac1*m2 + jac12*jac13*jac15 - jac8*udot2;
+    G[1] = (1.0/2.0)*L1*L2*jac11*jac13*m2 - jac0*jac30 - jac25 - jac27*udot2;
+    G[2] = jac2*jac23*(sin_q1*sin_q1);
+    G[3] = L1*jac31*jac7 + jac32;
+    G[4] = (1.0/2.0)*L1*L2*jac11*jac33*m2 - jac24*jac34 - jac25 - jac8*udot1;
+    G[5] = L2*(-jac36 - jac37) - (cos_q2*cos_q2)*dF*jac35 + g*jac14*jac34 + jac12*jac15*jac33 - jac27*udot1 - jac30*jac34;
+    G[6] = L2*jac26*jac38*m2 + jac32;
+    G[7] = jac23*jac35*(sin_q2*sin_q2);
+    Jw[0] = -jac17*v_By - jac3*jac38;
+    Jw[1] = -jac29*v_By - jac31*jac36;
     Jw[2] = F*jac16;
-    Jw[3] = F*jac27;
-    Jw[4] = jac23*v_Bx - jac36*jac4;
-    Jw[5] = jac28*v_Bx - jac29*jac35;
-    Jw[6] = -F_f*jac0 - jac0*jac38;
-    Jw[7] = -F_f*jac32 - jac32*jac38;
+    Jw[3] = F*jac28;
+    Jw[4] = jac24*v_Bx - jac38*jac4;
+    Jw[5] = jac30*v_Bx - jac31*jac37;
+    Jw[6] = -F_f*jac0 - jac39*v_Bx;
+    Jw[7] = -F_f*jac34 - jac40*v_Bx;
+    Jw[8] = -jac17;
+    Jw[9] = -jac29;
+    Jw[10] = 0;
+    Jw[11] = 0;
+    Jw[12] = jac24;
+    Jw[13] = jac30;
+    Jw[14] = -jac39;
+    Jw[15] = -jac40;
 
     for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) J[k] = 0.0;
     for (int j = 0; j < 4; ++j) {
@@ -459,7 +471,7 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
         for (int i = 0; i < 2; ++i) column[i] = G[i * 4 + j];
         ldl_solve(M, dinv, column);
         for (int i = 0; i < 2; ++i) J[(2 + i) * MODEL_NSTATE + j] = column[i];
-        for (int k = 0; k < 2; ++k) J[(4 + k) * MODEL_NSTATE + j] = Jw[k * 4 + j];
+        for (int k = 0; k < 4; ++k) J[(4 + k) * MODEL_NSTATE + j] = Jw[k * 4 + j];
     }
     for (int i = 0; i < 2; ++i) J[i * MODEL_NSTATE + 2 + i] = 1.0;  /* dq/dt = u */
     for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) {

@@ -377,6 +377,8 @@ static void impact_begins(model_machine *m, model_params *p, double t, const dou
         m->scale[2 + i] = speed;
     }
     for (int i = 4; i < MODEL_NSTATE; ++i) m->scale[i] = T;
+    /* the impulses (after the works): the momentum m_eff |v_B| the impact takes out, sqrt(2 T m_eff) */
+    for (int i = MODEL_Y_P_normal; i < MODEL_NSTATE; ++i) m->scale[i] = sqrt(2.0 * T * m_eff);
 }
 
 int model_machine_start(model_machine *m, model_params *p, double t, const double *y,

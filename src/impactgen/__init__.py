@@ -5,6 +5,7 @@
     result = impactgen.simulate(scene)          # engine="c" (CVODE) or "reference"
     result.summary, result.phases, result.t, result.q, result.u
 """
+from .compare import compare_laws
 from .engines import simulate
 from .errors import BuildError, ImpactgenError, SceneError, SolverError
 from .scene import Scene, load_scene, scene_from_dict
@@ -14,4 +15,4 @@ __version__ = "0.1.0"
 
 
 __all__ = ["BuildError", "ImpactgenError", "SceneError", "SolverError", "Scene", "load_scene",
-           "scene_from_dict", "simulate", "sweep", "__version__"]
+           "scene_from_dict", "simulate", "sweep", "compare_laws", "__version__"]

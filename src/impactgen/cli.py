@@ -9,6 +9,7 @@
     impactgen plot SCENE [--out DIR] [--impact K | --window T0:T1] [--set KEY=VALUE ...]
     impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
     impactgen stability [--quick] [--json] [--out DIR]
+    impactgen compare SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
 
 Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
 on stderr; --debug shows the traceback.
@@ -120,6 +121,17 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     plot.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    # -- compare (the rigid-body impact laws beside the compliant run): impactgen.compare
+    cmp = sub.add_parser("compare", help="the rigid-body impact laws beside the compliant run",
+                         description="Simulate a scene's first impact, then give its pre-impact state to "
+                                     "Newton's, Poisson's and Stronge's energetic law with the coefficients "
+                                     "of restitution the compliant run produced (docs/impact-laws.md).")
+    cmp.add_argument("scene", type=Path, help=SCENE_HELP)
+    cmp.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    cmp.add_argument("--json", action="store_true", help="print the rows as one JSON object")
+    cmp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    cmp.add_argument("--debug", action="store_true", help="show tracebacks")
+
     bench = sub.add_parser("bench", help="work-precision, RHS and scaling benchmarks with a report")
     bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
     bench.add_argument("--out", type=Path, default=Path("bench-results"), help="report folder")
@@ -171,6 +183,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _plot(args)
         if args.command == "stability":
             return _stability(args)
+        if args.command == "compare":
+            return _compare(args)
         if args.command == "bench":
             from .bench import run_benchmarks
             parts = {p.strip() for p in args.parts.split(",") if p.strip()}
@@ -348,6 +362,26 @@ def _run(args: argparse.Namespace) -> int:
         print(f"impactgen: error: {_one_line(result.message)}", file=sys.stderr)
         return SolverError.exit_code
     return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    """impactgen compare: the compliant impact and the rigid laws given its coefficients."""
+    import impactgen
+    from .compare import format_comparison
+    scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    table = impactgen.compare_laws(scene, engine=args.engine)
+    if args.json:
+        rows = table.to_dict(orient="records")
+        print(json.dumps({"scene": scene.name, "rows": [{k: _json_number(v) for k, v in r.items()} for r in rows]}))
+    else:
+        print("\n".join(format_comparison(table, scene.n)))
+    return 0
+
+
+def _json_number(value):
+    """NaN and infinities as null (JSON has none), numpy scalars as Python's."""
+    value = value.item() if hasattr(value, "item") else value
+    return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -557,6 +591,16 @@ def _impacts_table(result) -> list[str]:
     return lines
 
 
+def _coefficient_lines(c: dict) -> list[str]:
+    """The impact's coefficients of restitution and impulses (docs/impact-laws.md), once it ended."""
+    if c["e_N"] is None:
+        return []
+    return [f"  restitution       e_N = {c['e_N']:.5f}, e_P = {c['e_P']:.5f}, e_E = {c['e_E']:.5f} "
+            f"(v_n0 = {c['v_n0']:.4g} m/s; impactgen compare: the rigid-body laws)",
+            f"  impulses          P_c = {c['P_c']:.5g} N s, P_r = {c['P_r']:.5g} N s, P_t = {c['P_t']:.5g} N s, "
+            f"friction's share of the loss {c['friction_share']:.3f}"]
+
+
 def format_summary(result) -> str:
     """The text `impactgen run` prints: the first impact, then the whole run if it went on."""
     first, run = result.first_impact, result.summary
@@ -577,6 +621,7 @@ def format_summary(result) -> str:
             f"W_gravity = {e['W_gravity']:.4g} J, residual = {e['residual']:.2g} J",
             "  speeds after      u = [" + ", ".join(f"{v:.6g}" for v in s["u_final"]) + "] rad/s",
         ]
+        lines += _coefficient_lines(s["coefficients"])
         if s["stick_slip"]:
             lines.append("  stick-slip        " + ", ".join(f"{w['from']} -> {w['to']} at {w['t']:.9g} s"
                                                          for w in s["stick_slip"]))

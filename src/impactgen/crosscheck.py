@@ -205,6 +205,8 @@ def rhs_pair(scene: Scene, phase: str, y: np.ndarray, delta_m: float) -> tuple[n
         params.delta_r = delta_r
         params.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
     params.phase = PHASE_LAWS.index(phase)
+    if len(y) != model.nstate:
+        raise ValueError(f"the state has {len(y)} entries; this model has {model.nstate}")
     y_c = ffi.new("double[]", [float(v) for v in y])
     ydot = ffi.new("double[]", len(y))
     flag = model.lib.model_rhs(0.0, y_c, ydot, params)

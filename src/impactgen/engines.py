@@ -93,8 +93,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     >>> import impactgen
     >>> scene = impactgen.load_scene("paper")
     >>> result = impactgen.simulate(scene, rtol=1e-8, t_eval=[0.0, 1e-4, 2e-4])
-    >>> result.y.shape                                   # q1, q2, u1, u2, W_normal, W_friction
-    (6, 3)
+    >>> result.y.shape                     # q1, q2, u1, u2, W_normal, W_friction, P_normal, P_friction
+    (8, 3)
     >>> round(result.summary["delta_r"] * 1e6, 2)       # permanent deformation in um
     5.57
     """

@@ -30,7 +30,7 @@ def default_format() -> str:
 def trajectory_columns(result: SimulationResult) -> dict[str, tuple[np.ndarray, str]]:
     """Name -> (samples, unit) of every column of the trajectory table."""
     columns: dict[str, tuple[np.ndarray, str]] = {"t": (result.t, "s")}
-    units = {"q": "rad", "u": "rad/s", "W": "J"}
+    units = {"q": "rad", "u": "rad/s", "W": "J", "P": "N s"}  # P_*: the contact forces' impulses
     for name, row in zip(result.state_names, result.y):
         columns[name] = (row, units[name[0]])
     for name, values in result.outputs.items():

@@ -113,6 +113,7 @@ def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) 
             impact.stick_slip.append((t, label(state, slip), label(next_state, next_slip)))
         if act & MAX_COMPRESSION:
             impact.delta_max, impact.P_max, impact.delta_r, impact.R_res = delta_max, P_max, delta_r, R_res
+            impact.i_max = sample
         if state != free and next_state != state:
             impact.switches.append((t, STATES[state], STATES[next_state]))
         if act & END:

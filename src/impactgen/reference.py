@@ -125,6 +125,8 @@ class Contact:
     plastic: bool
     exact_coulomb: bool = False
     slip: float = 1.0  # exact Coulomb: +1 / -1 slipping along +x / -x, 0 stuck
+    frozen: bool = False  # friction keeps the direction it had at contact start
+    frozen_sign: float = 0.0  # frozen: the sign of v_Bx when the contact began
     delta_m: float = 0.0
     delta_r: float = 0.0
     R_res: float = 0.0
@@ -142,7 +144,8 @@ class Contact:
                    B=0.14 * math.exp(23 * weak.yield_strength / E_star),
                    mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
                    plastic=scene.contact.model == "three-phase", R_res=R,
-                   exact_coulomb=scene.contact.friction_mode == "coulomb" and scene.contact.friction > 0)
+                   exact_coulomb=scene.contact.friction_mode == "coulomb" and scene.contact.friction > 0,
+                   frozen=scene.contact.friction_mode == "frozen")
 
     def hertz(self, delta: float, radius: float) -> float:
         return 4.0 / 3.0 * self.E_star * math.sqrt(radius) * delta ** 1.5 if delta > 0 else 0.0
@@ -171,6 +174,8 @@ class Contact:
             return 0.0
         if self.exact_coulomb:
             return -self.mu * F * self.slip
+        if self.frozen:
+            return -self.mu * F * self.frozen_sign
         return -self.mu * F * v_Bx / math.sqrt(v_Bx ** 2 + self.eps ** 2)
 
     def at_maximum_compression(self, delta_m: float, P_m: float) -> None:
@@ -209,7 +214,8 @@ class ReferenceModel:
         F = self.contact.normal_force(phase, self.contact.y_s - y_B)
         F_f = self.tangential_force(y, phase, F, v_Bx)
         works = [F * v_By] + ([F_f * v_Bx] if self.friction_state else [])
-        return np.concatenate([self.chain_rates(t, y, F, F_f), works])
+        impulses = [F] + ([F_f] if self.friction_state else [])  # P_normal[, P_friction]
+        return np.concatenate([self.chain_rates(t, y, F, F_f), works, impulses])
 
     def stuck(self, phase: str) -> bool:
         return self.contact.exact_coulomb and self.contact.slip == 0 and phase != "free"
@@ -388,11 +394,13 @@ def _slip_direction_check(model: ReferenceModel, y: np.ndarray, phase: str, t: f
 
 
 def _begin_slip(model: ReferenceModel, y: np.ndarray) -> None:
-    """A contact begins slipping the way the tip moves (as at a stop if it does not)."""
-    if not model.contact.exact_coulomb:
-        return
+    """A contact begins slipping the way the tip moves (as at a stop if it does not); frozen
+    friction keeps that direction to separation."""
     n = model.n
     _, _, v_x, v_y = model.chain.tip(y[:n], y[n:2 * n])
+    model.contact.frozen_sign = float(np.sign(v_x))
+    if not model.contact.exact_coulomb:
+        return
     moving = abs(v_x) > 1e-12 * math.hypot(v_x, v_y)
     model.contact.slip = math.copysign(1.0, v_x) if moving else _slip_at_stop(model, y, "elastic")
 
@@ -415,7 +423,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     n = scene.n
     rtol = scene.solver.rtol if rtol is None else rtol
     atol_q = scene.solver.atol if atol is None else atol
-    nstate = 2 * n + (2 if model.friction_state else 1)
+    n_works = 2 if model.friction_state else 1
+    nstate = 2 * n + 2 * n_works  # q, u, the works, the impulses
     energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
     atol_vec = np.full(nstate, atol_q)
     atol_vec[2 * n:] = atol_q * energy_scale
@@ -513,6 +522,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
                     impact.delta_max = delta_m
                     impact.P_max = model.contact.normal_force(phase, delta_m)
                     impact.delta_r, impact.R_res = model.contact.delta_r, model.contact.R_res
+                    impact.i_max = rec.count - 1
                 impact.switches.append((t, phase, new))
                 if new == "free":
                     impact.t_end, impact.i_end = t, rec.count - 1

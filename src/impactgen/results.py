@@ -18,7 +18,7 @@ import numpy as np
 
 from .dense import DenseSolution
 from .scene import Scene
-from .validity import YieldScale, energy_warning, validity_warnings
+from .validity import YieldScale, energy_warning, frozen_friction_warning, validity_warnings
 
 Part = TypeVar("Part")
 
@@ -63,10 +63,25 @@ class Impact:
     W_normal: float = 0.0  # J, work of the normal force over the impact
     W_friction: float = 0.0  # J
     W_gravity: float = 0.0  # J
+    i_max: int | None = None  # sample index at (the latest) maximum compression
+    # impulses and coefficients of restitution (docs/model.md section 9; COEFFICIENTS), from
+    # the samples at its start, maximum compression and end; NaN until it has ended
+    v_n0: float = math.nan  # m/s, the tip's normal speed at first contact (negative approaching)
+    P_c: float = math.nan  # N s, normal impulse of compression
+    P_r: float = math.nan  # N s, of restitution
+    P_t: float = math.nan  # N s, tangential (friction) impulse
+    e_N: float = math.nan  # kinematic (Newton): -v_n(end) / v_n0
+    e_P: float = math.nan  # kinetic (Poisson): P_r / P_c
+    e_E: float = math.nan  # energetic (Stronge): sqrt(W_r / -W_c)
+    friction_share: float = math.nan  # W_friction / (W_normal + W_friction): friction's share of the loss
 
     @property
     def duration(self) -> float | None:
         return None if self.t_end is None else self.t_end - self.t_start
+
+    def coefficients(self) -> dict[str, float]:
+        """The impulses and coefficients of restitution (COEFFICIENTS) by name."""
+        return {name: getattr(self, name) for name in COEFFICIENTS}
 
     def to_dict(self) -> dict[str, Any]:
         """One row of the impacts table (JSON and DataFrame)."""
@@ -75,6 +90,7 @@ class Impact:
             "delta_max": self.delta_max, "delta_r": self.delta_r, "P_max": self.P_max,
             "R_res": self.R_res, "T_before": self.T_before, "T_after": self.T_after,
             "W_normal": self.W_normal, "W_friction": self.W_friction, "W_gravity": self.W_gravity,
+            **self.coefficients(),
             "switches": _switch_list(self.switches), "stick_slip": _switch_list(self.stick_slip),
         }
 
@@ -95,9 +111,34 @@ class Ready(Generic[Part]):
         return self.value
 
 
+# The impulses and coefficients of restitution of an impact (docs/model.md section 9), with units.
+COEFFICIENT_UNITS = {"v_n0": "m/s", "P_c": "N s", "P_r": "N s", "P_t": "N s", "e_N": "1", "e_P": "1", "e_E": "1",
+                     "friction_share": "1"}
+COEFFICIENTS = tuple(COEFFICIENT_UNITS)
 IMPACT_UNITS = {"t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
                 "P_max": "N", "R_res": "m", "T_before": "J", "T_after": "J", "W_normal": "J",
-                "W_friction": "J", "W_gravity": "J"}
+                "W_friction": "J", "W_gravity": "J", **COEFFICIENT_UNITS}
+
+
+def integral_names(nstate: int, n: int) -> tuple[str, ...]:
+    """The states after q and u: the works W_normal[, W_friction], then the impulses
+    P_normal[, P_friction] (with friction there are four, without two)."""
+    return ("W_normal", "W_friction", "P_normal", "P_friction") if nstate - 2 * n == 4 else ("W_normal", "P_normal")
+
+
+def impact_coefficients(begin, at_max, end, v_n0: float, v_n1: float) -> dict[str, float]:
+    """The impulses and coefficients (COEFFICIENTS) of an impact from its integrated states
+    (dicts of integral_names: the works and the impulses) at its start, at its maximum
+    compression and at its end, and the normal speed at its start and end. The C engine
+    tallies the same arithmetic (cvode_glue.c, summarize_coefficients)."""
+    W_c, W_r = at_max["W_normal"] - begin["W_normal"], end["W_normal"] - at_max["W_normal"]
+    W_f = end.get("W_friction", 0.0) - begin.get("W_friction", 0.0)
+    P_c, P_r = at_max["P_normal"] - begin["P_normal"], end["P_normal"] - at_max["P_normal"]
+    ratio = W_r / -W_c if W_c != 0 else math.nan
+    return {"v_n0": v_n0, "P_c": P_c, "P_r": P_r, "P_t": end.get("P_friction", 0.0) - begin.get("P_friction", 0.0),
+            "e_N": -v_n1 / v_n0 if v_n0 != 0 else math.nan, "e_P": P_r / P_c if P_c != 0 else math.nan,
+            "e_E": math.sqrt(ratio) if ratio >= 0 else math.nan,
+            "friction_share": W_f / (W_c + W_r + W_f) + 0.0 if W_c + W_r + W_f != 0 else math.nan}
 
 
 @dataclass
@@ -105,7 +146,7 @@ class Trajectory:
     """Samples at every accepted integrator step and at every switch (or at t_eval)."""
 
     t: np.ndarray  # (N,)
-    y: np.ndarray  # (N, nstate): q, u, then the works W_normal[, W_friction]; rows are samples
+    y: np.ndarray  # (N, nstate): q, u, the works W_normal[, W_friction], the impulses P_normal[, P_friction]
     phase: np.ndarray  # (N,) phase name of the step that ended at each sample
     outputs: Mapping[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
 
@@ -150,7 +191,15 @@ class Tallied(NamedTuple):
     n_switches: int
     n_stick_slip: int
     impacts: int
-    y_final: tuple[float, ...]  # q, u, then the works
+    v_n0: float  # the first impact's impulses and coefficients (COEFFICIENTS), NaN until it ended
+    P_c: float
+    P_r: float
+    P_t: float
+    e_N: float
+    e_P: float
+    e_E: float
+    friction_share: float
+    y_final: tuple[float, ...]  # q, u, then the works and the impulses
 
 
 _Y_FINAL = len(Tallied._fields) - 1  # y_final, the last field, is the rest of a record's values
@@ -218,7 +267,8 @@ class SimulationResult:
     t : ndarray, shape (n_points,)
         Sample times in s: every integrator step and switch, or `t_eval` if it was given.
     y : ndarray, shape (n_states, n_points)
-        The states at `t`: q1..qn (rad), u1..un (rad/s), W_normal (J)[, W_friction (J)].
+        The states at `t`: q1..qn (rad), u1..un (rad/s), W_normal (J)[, W_friction (J)], the
+        impulses P_normal (N s)[, P_friction (N s)].
     q, u : ndarray, shape (n, n_points)
         Link angles and angular speeds.
     delta, delta_rate, F, F_f, x_B, y_B, v_Bx, v_By, T, V : ndarray, shape (n_points,)
@@ -366,9 +416,9 @@ class SimulationResult:
 
     @property
     def state_names(self) -> list[str]:
-        n, extra = self.n, self._shown.y.shape[1] - 2 * self.n
+        n = self.n
         return ([f"q{i + 1}" for i in range(n)] + [f"u{i + 1}" for i in range(n)]
-                + ["W_normal", "W_friction"][:extra])
+                + list(integral_names(self._shown.y.shape[1], n)))
 
     @property
     def phase(self) -> np.ndarray:
@@ -410,7 +460,7 @@ class SimulationResult:
     @property
     def W_friction(self) -> np.ndarray:
         y = self.y
-        return y[2 * self.n + 1] if y.shape[0] > 2 * self.n + 1 else np.zeros(y.shape[1])
+        return y[2 * self.n + 1] if y.shape[0] - 2 * self.n == 4 else np.zeros(y.shape[1])
 
     @cached_property
     def warnings(self) -> list[str]:
@@ -423,7 +473,15 @@ class SimulationResult:
         else:
             summary = self.summary
             budget = (summary["T0"], summary["Tf"], *(summary["energy"][k] for k in ENERGY_TERMS))
-        return validity_warnings(self.scene, self.impact_records, self.contact) + energy_warning(self.scene, *budget)
+        return (validity_warnings(self.scene, self.impact_records, self.contact) + energy_warning(self.scene, *budget)
+                + self._frozen_friction_warning())
+
+    def _frozen_friction_warning(self) -> list[str]:
+        """friction_mode = "frozen": whether the tip's tangential speed reversed in contact."""
+        if self.scene.contact.friction_mode != "frozen":
+            return []
+        traj = self.trajectory
+        return frozen_friction_warning(self.scene, self.impact_records, traj.t, traj.y)
 
     def impacts_frame(self):
         """The impacts as a pandas DataFrame, one row per impact (units in `IMPACT_UNITS`).
@@ -472,14 +530,23 @@ def _fill_impact_energies(traj: Trajectory, n: int, impacts: list[Impact]) -> No
         impact.T_before, impact.T_after, works = _budget(traj, n, i0, i1)
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
+        v_n = traj.outputs["v_By"]
+        impact.v_n0 = float(v_n[i0])  # the rest once it has ended (as the C engine tallies them)
+        if impact.i_end is not None and impact.i_max is not None:
+            names = integral_names(traj.y.shape[1], n)
+            begin, at_max, end = ({k: v for k, v in zip(names, traj.y[i, 2 * n:].tolist())}
+                                  for i in (i0, impact.i_max, i1))
+            for name, value in impact_coefficients(begin, at_max, end, float(v_n[i0]), float(v_n[i1])).items():
+                setattr(impact, name, value)
 
 
 def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:
     """Kinetic energy at samples i0 and i1, and the energy budget between them."""
     T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
     T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
-    w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction] at both ends
-    return T0, Tf, energy_balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if len(w0) > 1 else 0.0, W_g)
+    w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction], the impulses at both ends
+    friction = len(w0) == 4
+    return T0, Tf, energy_balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if friction else 0.0, W_g)
 
 
 def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
@@ -525,7 +592,8 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
         max([i.P_max for i in impacts], default=0.0), deepest.R_res if deepest else 0.0, float(contact),
         first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
         *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
-        len(first.stick_slip) if first else 0, len(result.impacts), tuple(traj.y[i1].tolist()))
+        len(first.stick_slip) if first else 0, len(result.impacts),
+        *(getattr(first, name) if first else math.nan for name in COEFFICIENTS), tuple(traj.y[i1].tolist()))
     return _from_tally(tallied, n, impacts)
 
 
@@ -542,7 +610,7 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
     first = impacts[0] if impacts else None
     (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
-     W_normal, W_friction, W_gravity, residual, _, _, count, y) = s  # Tallied's fields, one unpacking
+     W_normal, W_friction, W_gravity, residual, _, _, count, *coefficients, y) = s  # Tallied's fields
     return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
             "P_max": P_max, "R_res": R_res, "t_contact": t_contact,
             "t_impact": None if t_impact != t_impact else t_impact,
@@ -551,7 +619,8 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
             "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": count,
             "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": t_final,
             "energy": {"W_normal": W_normal, "W_friction": W_friction, "W_gravity": W_gravity,
-                       "residual": residual}}
+                       "residual": residual},
+            "coefficients": {name: None if v != v else v for name, v in zip(COEFFICIENTS, coefficients)}}
 
 
 def _dent(impact: Impact) -> float:

@@ -27,7 +27,9 @@ from .errors import SceneError
 
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 CONTACT_MODELS = ("three-phase", "hertz")
-FRICTION_MODES = ("regularized", "coulomb")
+# "frozen": the friction keeps the direction it had at contact start (docs/model.md: the
+# paper's published energy losses; not physical once the tip's tangential speed reverses)
+FRICTION_MODES = ("regularized", "coulomb", "frozen")
 # CVODE BDF, CVODE Adams, ARKODE's explicit Runge-Kutta pair, the same pair in plain C, and that
 # pair handing a segment that turns stiff (or long) to BDF (the glue's IG_METHOD_*, in order)
 METHODS = ("bdf", "adams", "erk", "dopri5", "auto")

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import numpy as np
+
 from .codegen.thresholds import THRESHOLD
 from .laws import YIELD_ONSET, contact_constants, contact_radius
 from .scene import Scene
@@ -120,6 +122,32 @@ def _grouped(found: dict[str, list[tuple[int, str]]], n_impacts: int) -> list[st
             warnings.append(f"{len(items)} of {n_impacts} impacts, from impact {first} on "
                             f"(first: {text})")
     return warnings
+
+
+def frozen_friction_warning(scene: Scene, impacts, t, y) -> list[str]:
+    """With contact.friction_mode = "frozen", a warning when the tip's tangential speed
+    reverses within an impact (seen at the samples t, y: rows q, u, ...): the friction then
+    pushes the tip along its motion and does positive work, which no physical friction does."""
+    if scene.contact.friction_mode != "frozen" or scene.contact.friction == 0:
+        return []
+    n, L = scene.n, np.asarray(scene.chain.length)
+    reversed_at = []
+    for k, impact in enumerate(impacts, start=1):
+        i1 = impact.i_end if impact.i_end is not None else len(t) - 1
+        q, u = y[impact.i_start:i1 + 1, :n], y[impact.i_start:i1 + 1, n:2 * n]
+        v_x = -(L * np.sin(q) * u).sum(axis=1)  # the tip's tangential speed at each sample
+        start = np.sign(v_x[0])
+        turned = np.nonzero(v_x * start < 0)[0] if start != 0 else []
+        if len(turned):
+            reversed_at.append((k, float(t[impact.i_start + turned[0]])))
+    if not reversed_at:
+        return []
+    k, when = reversed_at[0]
+    which = "the impact" if len(impacts) == 1 else f"{len(reversed_at)} of {len(impacts)} impacts (first: impact {k})"
+    return [f"{which}: the tip's tangential speed reverses (t = {when:.6g} s) while friction_mode = \"frozen\" "
+            "keeps the friction's direction from contact start; from there on the friction does positive work, "
+            "which is not physical (the mode reproduces the paper's published energy losses; "
+            "\"regularized\" or \"coulomb\" is the physical law)"]
 
 
 def energy_warning(scene: Scene, T0: float, Tf: float, W_normal: float, W_friction: float, W_gravity: float,

@@ -25,7 +25,8 @@ PHASE = "elastoplastic"  # the costliest force law
 
 def _state(scene, delta: float = 1.5e-5) -> tuple[np.ndarray, float]:
     """The initial state of the steel chain, with the surface delta above the tip."""
-    y = np.concatenate([scene.q0, scene.u0, np.zeros(2)])
+    integrals = 4 if scene.contact.friction > 0 else 2  # the works and the impulses
+    y = np.concatenate([scene.q0, scene.u0, np.zeros(integrals)])
     y_B = sum(L * np.sin(q) for L, q in zip(scene.chain.length, scene.q0))
     return y, y_B + delta
 

@@ -3,7 +3,8 @@
 One list drives the C variable table (model_fmu.h) and modelDescription.xml, so a value
 reference means the same thing on both sides. Parameters are the scene's inputs
 (`chain.length[1]`, `rod.E`, `contact.friction`, `initial.u[2]`, ...); the continuous states
-are `q[i]`, `u[i]` and the works `W_normal`, `W_friction`; the outputs are the tip's
+are `q[i]`, `u[i]`, the works `W_normal`, `W_friction` and the impulses `P_normal`,
+`P_friction`; the outputs are the tip's
 penetration, forces and speeds and the energies, and the machine's discrete outputs.
 """
 from __future__ import annotations
@@ -46,14 +47,16 @@ def variables(model: ModelExpressions, scene) -> list[Variable]:
     states = []
     for k, name in enumerate(model.state_names):
         label = f"{name[0]}[{name[1:]}]" if k < 2 * n else name
-        unit = "rad" if k < n else ("rad/s" if k < 2 * n else "J")
+        impulse = k >= 2 * n and name.startswith("P_")
+        unit = "rad" if k < n else ("rad/s" if k < 2 * n else "N.s" if impulse else "J")
         doc = (f"absolute angle of link {k + 1}" if k < n else
-               f"angular speed of link {k - n + 1}" if k < 2 * n else f"work of the {name[2:]} force")
+               f"angular speed of link {k - n + 1}" if k < 2 * n else
+               f"impulse of the {name[2:]} force" if impulse else f"work of the {name[2:]} force")
         states.append(add(name=label, type="Real", causality="local", variability="continuous",
                           initial="calculated" if k < 2 * n else "exact", start=None if k < 2 * n else 0.0,
                           unit=unit, description=doc, kind="state", index=k))
     for k, s in enumerate(states):
-        unit = {"rad": "rad/s", "rad/s": "rad/s2", "J": "W"}[s.unit]
+        unit = {"rad": "rad/s", "rad/s": "rad/s2", "J": "W", "N.s": "N"}[s.unit]
         add(name=f"der({s.name})", type="Real", causality="local", variability="continuous",
             initial="calculated", start=None, unit=unit, description=f"time derivative of {s.name}",
             kind="der", index=k, derivative_of=s.vr)
@@ -99,4 +102,4 @@ def _unit(f: Field) -> str:
 UNITS = {"rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
          "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3}, "m": {"m": 1},
          "m/s": {"m": 1, "s": -1}, "m/s2": {"m": 1, "s": -2}, "N": {"kg": 1, "m": 1, "s": -2},
-         "kg": {"kg": 1}, "Pa": {"kg": 1, "m": -1, "s": -2}}
+         "kg": {"kg": 1}, "Pa": {"kg": 1, "m": -1, "s": -2}, "N.s": {"kg": 1, "m": 1, "s": -1}}

@@ -6,6 +6,19 @@
 
 #include "tally.h"
 
+/* ---- impact coefficients (MODEL section 9): the impulses and the normal speed at a sample,
+ * the first impact's maximum compression, and the coefficients from the three samples ---- */
+static void read_impulses(ig_point *point, const double *y, const double *out)
+{
+    point->P_normal = y[MODEL_Y_P_normal];
+#ifdef MODEL_Y_P_friction
+    point->P_friction = y[MODEL_Y_P_friction];
+#else
+    point->P_friction = 0.0;
+#endif
+    point->v_n = out[MODEL_OUT_v_By];
+}
+
 /* The values a summary reads at sample k of the buffers. */
 void ig_read_point(ig_point *point, double t, const double *y, const double *out)
 {
@@ -13,8 +26,41 @@ void ig_read_point(ig_point *point, double t, const double *y, const double *out
     point->T = out[MODEL_OUT_T];
     point->V = out[MODEL_OUT_V];
     point->W_normal = y[2 * MODEL_NQ];
-    point->W_friction = MODEL_NSTATE > 2 * MODEL_NQ + 1 ? y[MODEL_NSTATE - 1] : 0.0;
+#ifdef MODEL_Y_W_friction
+    point->W_friction = y[MODEL_Y_W_friction];
+#else
+    point->W_friction = 0.0;
+#endif
     memcpy(point->y, y, sizeof point->y);
+    read_impulses(point, y, out);
+}
+
+/* Follow the first impact's maximum compression (the latest, after a reloading). */
+static void tally_coefficients(ig_tally *a, const ig_segment *seg, double t, const double *y, const double *out)
+{
+    if (a->impacts == 1 && a->ended == 0 && (seg->act & MODEL_ACT_MAX_COMPRESSION)) {
+        ig_read_point(&a->first_max, t, y, out);
+        a->first_compressed = 1;
+    }
+}
+
+/* The first impact's impulses and coefficients, from its start, maximum compression and end;
+ * NAN while it has not ended (or never reached maximum compression). */
+static void summarize_coefficients(const ig_tally *a, ig_summary *out)
+{
+    const ig_point *b = &a->first_begin, *m = &a->first_max, *e = &a->first_end;
+    out->v_n0 = a->impacts ? b->v_n : NAN;
+    out->P_c = out->P_r = out->P_t = out->e_N = out->e_P = out->e_E = out->friction_share = NAN;
+    if (a->ended == 0 || !a->first_compressed) return;
+    const double W_c = m->W_normal - b->W_normal, W_r = e->W_normal - m->W_normal;
+    const double W_f = e->W_friction - b->W_friction;
+    out->P_c = m->P_normal - b->P_normal;
+    out->P_r = e->P_normal - m->P_normal;
+    out->P_t = e->P_friction - b->P_friction;
+    out->e_N = -e->v_n / b->v_n;
+    out->e_P = out->P_r / out->P_c;
+    out->e_E = sqrt(W_r / -W_c);
+    out->friction_share = W_f / (W_c + W_r + W_f) + 0.0;  /* + 0.0: no -0 without friction */
 }
 
 void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact)
@@ -78,6 +124,7 @@ void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, c
             a->first_R_res = a->now_R_res;
         }
     }
+    tally_coefficients(a, seg, t_buf[k], y, out);
 }
 
 /* A summary from sample `from` to sample `to` (the energies, the works, the end state). */
@@ -111,6 +158,7 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     run->n_stick_slip = a->first_stick_slip;
     run->impacts = a->impacts;
     run->t_sustained = a->t_sustained;
+    summarize_coefficients(a, run);  /* the first impact's, as the run's switches are */
     if (a->impacts == 0) {
         *first = *run;
         return;
@@ -128,4 +176,5 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     first->n_stick_slip = a->first_stick_slip;
     first->impacts = a->impacts;
     first->t_sustained = a->t_sustained;
+    summarize_coefficients(a, first);
 }

@@ -30,6 +30,8 @@ typedef struct {
 typedef struct {
     double t, T, V, W_normal, W_friction;
     double y[MODEL_NSTATE];
+    double P_normal, P_friction;  /* the impulses of the contact forces (P_friction 0 without friction), N s */
+    double v_n;                   /* the contact point's normal speed (v_By, negative approaching), m/s */
 } ig_point;
 
 /* What a run keeps for its summaries while ig_run goes from segment to segment (over all
@@ -49,6 +51,8 @@ typedef struct {
     double t_contact;                 /* contact time of the ended impacts, s */
     double segment_start;             /* when the current segment began, s */
     double t_sustained;               /* when sustained contact first began, s; NAN if never */
+    ig_point first_max;               /* the first impact's (latest) maximum compression */
+    int first_compressed;             /* whether the first impact reached maximum compression */
 } ig_tally;
 
 /* A run's summary (MODEL section 6), over the whole run or over its first impact: energies
@@ -60,6 +64,13 @@ typedef struct {
     double W_normal, W_friction, W_gravity, residual;
     int n_switches, n_stick_slip;     /* the first impact's phase switches and stick-slip changes */
     int impacts;                      /* in the whole run */
+    /* The first impact's impulses and coefficients of restitution (MODEL section 9), NAN while
+     * it has not ended: the normal speed at its start v_n0 (m/s), the normal impulse of
+     * compression P_c and of restitution P_r (split at maximum compression), the tangential
+     * impulse P_t (N s); e_N = -v_n(end) / v_n0, e_P = P_r / P_c, e_E = sqrt(W_r / -W_c) of the
+     * normal force's work in restitution and compression; friction's share of the work the
+     * contact forces took, W_friction / (W_normal + W_friction). */
+    double v_n0, P_c, P_r, P_t, e_N, e_P, e_E, friction_share;
     double y_final[MODEL_NSTATE];     /* the state at its end */
 } ig_summary;
 

@@ -5,7 +5,8 @@
 - one or two varied keys (a grid): the summary fields against the first key's values, one
   line per value of the second (delta_r against |omega20| is Fig. 10b, against q20 Fig. 12);
   an angular speed whose values are all <= 0 is drawn against its magnitude, as the paper does;
-- random draws: histograms of the summary fields and scatter plots against each key.
+- random draws: histograms of the summary fields and scatter plots against each key;
+- the coefficients of restitution against the normal impact speed (coefficient_figure.py).
 """
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .coefficient_figure import coefficient_figure
 from .spec import SweepSpec
 
 FIELDS = {"delta_r": ("permanent deformation delta_r", "m"), "delta_max": ("maximum deformation delta_m", "m"),
@@ -45,6 +47,7 @@ def plot_sweep(frame, spec: SweepSpec, out: Path) -> list[Path]:
         paths += _random_figures(plt, ok, spec, folder)
     else:
         paths += _grid_figures(plt, ok, spec, folder)
+    paths += coefficient_figure(plt, ok, folder)  # e_N, e_P, e_E against |v_n0| (docs/impact-laws.md)
     return paths
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
 from ..export import trajectory_columns, write_parquet, write_table
-from ..results import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
+from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
 from . import execute
 from .spec import SweepSpec
@@ -94,7 +94,8 @@ def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.nd
         models.setdefault(records[k][0][1], []).append(k)
     n = max(records[k][1] for k in cases)
     names = [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
-             *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS)]
+             *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS),
+             *(f"coefficients.{name}" for name in COEFFICIENTS)]
     columns = {name: np.full(len(records), np.nan) for name in names}
     integers: set[str] = set()
     for dtype, rows in models.items():
@@ -117,6 +118,7 @@ def _record_columns(table: np.ndarray, n: int) -> dict[str, np.ndarray]:
     columns.update({f"q_final[{i + 1}]": y[:, i].copy() for i in range(n)})
     columns.update({name: _column(table[name]) for name in SUMMARY_LATER})
     columns.update({f"energy.{name}": _column(table[name]) for name in ENERGY_TERMS})
+    columns.update({f"coefficients.{name}": _column(table[name]) for name in COEFFICIENTS})  # the first impact's
     return columns
 
 
