@@ -113,9 +113,18 @@ def surface_height(result: SimulationResult) -> float:
     return joint_heights(scene)[-1] if scene.surface_height is None else scene.surface_height
 
 
-def _writer(path: Path, fps: int):
-    """The matplotlib writer for the file's suffix, or a one-line error saying what to do."""
-    from matplotlib import animation
+def check_output(path: Path, fps: int = DEFAULT_FPS, seconds: float = DEFAULT_SECONDS) -> int:
+    """Check, before a run, that `path` can be written with the tools installed and that
+    `fps` and `seconds` make a sensible animation; return its number of frames.
+
+    Raises
+    ------
+    SceneError
+        An unknown suffix, .mp4 without ffmpeg, a folder that does not exist, or bad numbers.
+    ImpactgenError
+        matplotlib is not installed.
+    """
+    _pyplot()
     suffix = path.suffix.lower()
     if suffix not in WRITERS:
         raise SceneError("--out", f"cannot write a {suffix or 'suffix-less'} file {path.name!r}: "
@@ -123,7 +132,9 @@ def _writer(path: Path, fps: int):
     if not _writer_available(WRITERS[suffix]):
         raise SceneError("--out", f"writing {path.name} needs ffmpeg, which is not installed: install "
                                   "ffmpeg (e.g. apt install ffmpeg) or write a .gif")
-    return animation.PillowWriter(fps=fps) if suffix == ".gif" else animation.FFMpegWriter(fps=fps)
+    if not path.resolve().parent.is_dir():
+        raise SceneError("--out", f"cannot write {path}: its folder {path.parent} does not exist")
+    return _frame_count(fps, seconds)
 
 
 def _writer_available(name: str) -> bool:
@@ -159,11 +170,12 @@ def animate(result: SimulationResult, path: str | Path, *, fps: int = DEFAULT_FP
         matplotlib is not installed.
     """
     path = Path(path)
-    frames = _frame_count(fps, seconds)
+    frames = check_output(path, fps, seconds)
+    from matplotlib import animation
     if not 0.0 < impact_share < 1.0:
         raise SceneError("impact_share", f"expected a share between 0 and 1, got {impact_share!r}")
     plt = _pyplot()
-    writer = _writer(path, fps)
+    writer = animation.PillowWriter(fps=fps) if path.suffix.lower() == ".gif" else animation.FFMpegWriter(fps=fps)
     times = frame_times(result, frames, impact_share)
     x, y = point_positions(result.scene.chain.length, angles_at(result, times))
     drawing = _Drawing(plt, result, times, x, y, impact_share, fps)
