@@ -126,10 +126,10 @@ def _parser() -> argparse.ArgumentParser:
                           "point (every joint, the tip) coloured by its phase. The frames are spread evenly "
                           "over a warped time: the impacts share half of them equally, flight and sustained "
                           "contact the other half in proportion to their duration (all of them if the run "
-                          "is all impact or all flight); the simulated time is shown in a corner, and the "
-                          "tip's height above the surface in micrometres beside the chain.")
+                          "is all impact or all flight). Beside the chain: the simulated time, and the tip's "
+                          "height above the surface in micrometres (docs/animate.md).")
     anim.add_argument("scene", type=Path, help=SCENE_HELP)
-    anim.add_argument("--out", type=Path, default=None, help="a .gif (Pillow) or .mp4 (needs ffmpeg) file "
+    anim.add_argument("--out", type=Path, default=None, metavar="FILE", help="a .gif (Pillow) or .mp4 (needs ffmpeg) file "
                       "(default ./<scene name>.gif)")
     anim.add_argument("--fps", type=int, default=20, metavar="N", help="frames per second (default 20)")
     anim.add_argument("--seconds", type=float, default=6.0, metavar="S",
