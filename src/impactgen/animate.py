@@ -59,7 +59,9 @@ def warped_time(result: SimulationResult, impact_share: float = IMPACT_SHARE) ->
         else:
             pieces.append((t0, t1, impact))
     if not pieces:
-        return np.array([t_first, max(t_last, t_first + 1e-300)]), np.array([0.0, 1.0])
+        return np.array([t_first, t_last]), np.array([0.0, 1.0])
+    pieces[0] = (t_first, *pieces[0][1:])  # the spans of a failed run may stop short of its samples
+    pieces[-1] = (pieces[-1][0], t_last, pieces[-1][2])
     impacts = sum(1 for p in pieces if p[2])
     slow = sum(t1 - t0 for t0, t1, impact in pieces if not impact)
     share = impact_share if impacts and slow > 0 else (1.0 if impacts else 0.0)
@@ -171,6 +173,9 @@ def animate(result: SimulationResult, path: str | Path, *, fps: int = DEFAULT_FP
     """
     path = Path(path)
     frames = check_output(path, fps, seconds)
+    if len(result.t) < 2 or not result.t[-1] > result.t[0]:
+        raise SceneError(None, f"the run ended at its first sample (t = {result.t[0]:g} s): nothing to animate"
+                               + (f"; {result.message}" if result.message else ""))
     from matplotlib import animation
     if not 0.0 < impact_share < 1.0:
         raise SceneError("impact_share", f"expected a share between 0 and 1, got {impact_share!r}")
@@ -268,8 +273,8 @@ class _Drawing:
         r = self.result
         times, warped = self.warp
         height_um = -r.delta * 1e6
-        depth_um = max(float(np.max(r.delta, initial=0.0)) * 1e6, 1e-3)
-        highest = float(np.max(height_um, initial=0.0))
+        depth_um = max(float(np.nanmax(r.delta, initial=0.0)) * 1e6, 1e-3)
+        highest = float(np.nanmax(height_um, initial=0.0))
         if highest > SYMLOG_ABOVE * depth_um:  # a flight's centimetres as well
             ax.set_yscale("symlog", linthresh=depth_um, linscale=2.0)
             decades = 10.0 ** np.arange(np.ceil(np.log10(SYMLOG_ABOVE * depth_um)), np.log10(highest) + 1)
