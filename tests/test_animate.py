@@ -124,3 +124,10 @@ def test_the_command_refuses_a_bad_suffix_before_the_run(tmp_path, capsys):
     assert cli.main(["animate", str(PAPER), "--out", str(tmp_path / "chain.webm")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("impactgen: error: --out:") and "\n" not in err
+
+
+def test_the_default_file_is_named_after_the_scene():
+    from impactgen.animate import default_path
+    assert str(default_path("paper-double-pendulum")) == "paper-double-pendulum.gif"
+    assert str(default_path("chain 3/free")) == "chain_3_free.gif"  # a plain file in the current folder
+    assert str(default_path("..")) == "animation.gif"

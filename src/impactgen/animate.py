@@ -17,6 +17,7 @@ it is below the surface. A result with a phase per point fills that one function
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +114,11 @@ def surface_height(result: SimulationResult) -> float:
     """The surface's height: the scene's, or the tip's at the start for "initial"."""
     scene = result.scene
     return joint_heights(scene)[-1] if scene.surface_height is None else scene.surface_height
+
+
+def default_path(scene_name: str) -> Path:
+    """`<scene name>.gif` in the current folder, the name made a plain file name."""
+    return Path((re.sub(r"[^A-Za-z0-9._-]+", "_", scene_name).strip("._") or "animation") + ".gif")
 
 
 def check_output(path: Path, fps: int = DEFAULT_FPS, seconds: float = DEFAULT_SECONDS) -> int:

@@ -496,9 +496,9 @@ def _plot(args: argparse.Namespace) -> int:
 
 def _animate(args: argparse.Namespace) -> int:
     import impactgen
-    from .animate import animate, check_output
+    from .animate import animate, check_output, default_path
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
-    out = args.out if args.out is not None else Path(f"{scene.name}.gif")
+    out = args.out if args.out is not None else default_path(scene.name)
     check_output(out, args.fps, args.seconds)  # a bad suffix, bad numbers or no ffmpeg: before the run
     result = impactgen.simulate(scene, engine=args.engine, dense_output=True)
     print(animate(result, out, fps=args.fps, seconds=args.seconds))
