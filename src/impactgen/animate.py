@@ -5,15 +5,16 @@ not spread evenly over the simulated time. They are spread evenly over a *warped
 which the impacts (the runs of contact phases between two flights) share `IMPACT_SHARE` of
 the frames in equal parts, and the flights and any sustained contact share the rest in
 proportion to their duration. A run that is all impact, or all flight, gives all its frames
-to it. The simulated time is written in a corner of every frame.
+to it. The simulated time is written beside the chain in every frame.
 
-A penetration is micrometres on a chain of metres: an inset draws the tip's height above
-the surface in micrometres (on a scale that is linear within the deepest penetration and
-logarithmic beyond it, so a flight's centimetres fit as well), against the same warped time.
+A penetration is micrometres on a chain of metres: a panel beside the chain draws the tip's
+height above the surface in micrometres (on a scale that is linear within the deepest
+penetration and logarithmic beyond it, so a flight's centimetres fit as well), against the
+same warped time.
 
 The contact points are every joint and the tip. Only the tip has a contact law today:
-`point_phases` gives the joints the phase "free", and draws one in a warning colour when
-it is below the surface. A result with a phase per point fills that one function.
+`point_phases` gives the joints the phase "free", and a free point below the surface is
+drawn in a warning colour. A result with a phase per point fills that one function.
 """
 from __future__ import annotations
 
@@ -173,18 +174,21 @@ def animate(result: SimulationResult, path: str | Path, *, fps: int = DEFAULT_FP
     Raises
     ------
     SceneError
-        An unknown suffix, .mp4 without ffmpeg, bad numbers, or a file that cannot be written.
+        An unknown suffix, .mp4 without ffmpeg, bad numbers, a run with nothing to show, or
+        a file that cannot be written.
     ImpactgenError
         matplotlib is not installed.
     """
     path = Path(path)
     frames = check_output(path, fps, seconds)
+    if not 0.0 < impact_share < 1.0:
+        raise SceneError("impact_share", f"expected a share between 0 and 1, got {impact_share!r}")
+    if not isinstance(dpi, (int, np.integer)) or dpi < 1:
+        raise SceneError("dpi", f"expected a whole number of dots per inch >= 1, got {dpi!r}")
     if len(result.t) < 2 or not result.t[-1] > result.t[0]:
         raise SceneError(None, f"the run ended at its first sample (t = {result.t[0]:g} s): nothing to animate"
                                + (f"; {result.message}" if result.message else ""))
     from matplotlib import animation
-    if not 0.0 < impact_share < 1.0:
-        raise SceneError("impact_share", f"expected a share between 0 and 1, got {impact_share!r}")
     plt = _pyplot()
     writer = animation.PillowWriter(fps=fps) if path.suffix.lower() == ".gif" else animation.FFMpegWriter(fps=fps)
     times = frame_times(result, frames, impact_share)
