@@ -321,7 +321,8 @@ class _Drawing:
         self.dot.set_offsets([[w, (y[-1] - self.y_s) * 1e6]])
         self.dot.set_facecolors([colours[-1]])
         rate = self._sim_per_video_second(k)
-        self.clock.set_text(f"t = {t:.6f} s\ntip: {PHASE_LABELS.get(self.phases[-1, k], self.phases[-1, k])}"
+        digits = int(np.clip(np.ceil(-np.log10(max(rate / self.fps, 1e-15))) + 1, 3, 12))  # a frame's step shows
+        self.clock.set_text(f"t = {t:.{digits}f} s\ntip: {PHASE_LABELS.get(self.phases[-1, k], self.phases[-1, k])}"
                             f"\n1 s of video = {rate:.3g} s")
 
     def _sim_per_video_second(self, k: int) -> float:
