@@ -129,8 +129,8 @@ def _parser() -> argparse.ArgumentParser:
                           "is all impact or all flight). Beside the chain: the simulated time, and the tip's "
                           "height above the surface in micrometres (docs/animate.md).")
     anim.add_argument("scene", type=Path, help=SCENE_HELP)
-    anim.add_argument("--out", type=Path, default=None, metavar="FILE", help="a .gif (Pillow) or .mp4 (needs ffmpeg) file "
-                      "(default ./<scene name>.gif)")
+    anim.add_argument("--out", type=Path, default=None, metavar="FILE",
+                      help="a .gif (Pillow) or .mp4 (needs ffmpeg) file (default ./<scene name>.gif)")
     anim.add_argument("--fps", type=int, default=20, metavar="N", help="frames per second (default 20)")
     anim.add_argument("--seconds", type=float, default=6.0, metavar="S",
                       help="length of the animation (default 6); it has N * S frames")
