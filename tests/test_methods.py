@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import impactgen
+from impactgen.validity import ENERGY_FLOOR, ENERGY_MARGIN
 
 
 @pytest.mark.parametrize("method", ["erk", "dopri5", "auto"])
@@ -85,7 +86,11 @@ def test_auto_hands_a_segment_that_turns_stiff_to_bdf(overrides):
     # 0.013 % and 7.6 % of T0 over four nearby starts.
     # Where the budget does not close the result says so; test_auto_and_bdf_agree_on_a_resolved_stuck_tip
     # holds the physics at tolerances that resolve it.
-    closes = abs(auto.summary["energy"]["residual"]) < 1e-4 * auto.summary["T0"]
+    # "Closes" as the result's own check has it (validity.energy_warning: ENERGY_MARGIN rtol of
+    # the budget's largest term): a budget that misses by more must say so.
+    s, e = auto.summary, auto.summary["energy"]
+    scale = max(abs(s["T0"]), abs(s["Tf"]), *(abs(e[k]) for k in ("W_normal", "W_friction", "W_gravity")))
+    closes = abs(e["residual"]) <= max(ENERGY_MARGIN * scene.solver.rtol, ENERGY_FLOOR) * scale
     assert closes or any("energy budget does not close" in w for w in auto.warnings)
 
 
