@@ -37,5 +37,9 @@ THRESHOLDS = (
               "Jackson-Green law (phase II, Eq. 10) beyond"),
     Threshold("ANGLE_ATOL_FLOOR", 1e-15,
               "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
+    Threshold("QUADRATURE_ATOL", 1e300,
+              "absolute tolerance of the impulses, N s: they are quadratures of the contact forces "
+              "that feed nothing back, so, as CVODES leaves quadratures out of its error test by "
+              "default, they do not set the step (finite: CVODE's error weights must be positive)"),
 )
 THRESHOLD = {t.name: t.value for t in THRESHOLDS}

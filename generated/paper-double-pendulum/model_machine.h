@@ -44,6 +44,7 @@ extern "C" {
 #define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (judged at the end of each segment from every step: the machine's observer) */
 #define MODEL_YIELD_ONSET 1.9  /* the Hertz law (phase I) holds up to this many critical deformations delta_c; the Jackson-Green law (phase II, Eq. 10) beyond */
 #define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
+#define MODEL_QUADRATURE_ATOL 1e+300  /* absolute tolerance of the impulses, N s: they are quadratures of the contact forces that feed nothing back, so, as CVODES leaves quadratures out of its error test by default, they do not set the step (finite: CVODE's error weights must be positive) */
 
 /* Machine states: the contact phases of MODEL section 4, plus reloading (restitution's force
  * law, watching the maximum compression). Codes are fixed; a pruned model never enters some. */

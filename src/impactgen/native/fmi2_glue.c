@@ -673,6 +673,9 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component comp, fmi2Real x_nomi
     /* the machine's tolerance scales: 1 for angles and speeds in flight, the impact's own
      * scales inside it (an importer's absolute tolerance is rtol times the nominal) */
     model_machine_atol(&c->m, &c->p, 1.0, 1.0, x_nominal);
+    /* the impulses (N s) are left out of the machine's error test (MODEL_QUADRATURE_ATOL),
+     * which is no scale: their nominal is 1 */
+    for (size_t i = MODEL_Y_P_normal; i < nx; ++i) x_nominal[i] = 1.0;
     return fmi2OK;
 }
 #else
