@@ -369,14 +369,19 @@ static void impact_begins(model_machine *m, model_params *p, double t, const dou
     const double m_total = chain_mass(p);
     const double m_eff = v_tip2 > 0.0 ? fmin(2.0 * T / v_tip2, m_total) : m_total;
     const double v_n = fmax(out[MODEL_OUT_delta_rate], 0.0);
-    const double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(p->R)), 0.4);
-    double speed = 0.0;
+    double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(p->R)), 0.4);
+    double speed = 0.0, energy = T;
     for (int i = 0; i < 2; ++i) speed = fmax(speed, fabs(y[2 + i]));
+    if (!(delta_est > 0.0)) {  /* a resting or grazing start: the scales of settling under the chain's weight */
+        delta_est = pow(3.0 * m_total * p->g / (4.0 * p->E_star * sqrt(p->R)), 2.0 / 3.0);
+        speed = fmax(speed, sqrt(2.0 * p->g * delta_est) / chain_length(p));
+        energy = fmax(energy, m_total * p->g * delta_est);
+    }
     for (int i = 0; i < 2; ++i) {
         m->scale[i] = MODEL_ANGLE_RESOLUTION * delta_est / chain_length(p);
         m->scale[2 + i] = speed;
     }
-    for (int i = 4; i < MODEL_NSTATE; ++i) m->scale[i] = T;
+    for (int i = 4; i < MODEL_NSTATE; ++i) m->scale[i] = energy;
 }
 
 int model_machine_start(model_machine *m, model_params *p, double t, const double *y,
@@ -406,7 +411,11 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     const int touching = delta >= -MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
     const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
     if (fabs(rate) <= MODEL_TANGENTIAL_TOLERANCE * tip_speed) rate = 0.0;  /* a tangential start */
-    if (touching && rate > 0.0) {
+    /* resting or grazing: no normal speed, but pulled into the surface (the free flight's
+     * d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in */
+    const int pulled_in = touching && rate == 0.0 &&
+                          model_delta_acceleration(t, y, p) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
+    if (touching && (rate > 0.0 || pulled_in)) {
         impact_begins(m, p, t, y, out);
         m->state = MODEL_MACHINE_ELASTIC;
         p->phase = law_of(m->state);
@@ -567,4 +576,18 @@ int model_machine_crossed(const model_machine *m, const double *ev, int *fired)
         count += fired[k];
     }
     return count;
+}
+
+int model_machine_below(const model_params *p, const double *y, double *depth)
+{
+    double h[MODEL_NPOINT];
+    const double shortest = fmin(p->L1, p->L2);
+    model_heights(y, h, p);
+    for (int k = 0; k < MODEL_NPOINT; ++k) {
+        if (h[k] < -MODEL_FLOOR_DEPTH * shortest) {
+            *depth = -h[k];
+            return k + 1;
+        }
+    }
+    return 0;
 }
