@@ -588,6 +588,19 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
     /* an importer that does not locate roots still gets its events at the next step */
     double ev[MODEL_NEVENT];
     int fired[MODEL_NEVENT];
+    double depth = 0.0;
+    const int point = model_machine_below(&c->p, c->y, &depth);  /* the floor net, as ig_run's */
+    if (point != 0) {
+        char name[32];
+        if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);
+        else snprintf(name, sizeof name, "the tip");
+        c->mode = FAILED;
+        *enterEventMode = fmi2False;
+        *terminateSimulation = fmi2True;
+        say(c, fmi2Error, "logStatusError", "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of "
+            "the shortest link): only the tip has a contact law", name, depth, c->t, 100.0 * MODEL_FLOOR_DEPTH);
+        return fmi2Error;
+    }
     model_events(c->t, c->y, ev, &c->p);
     *enterEventMode = model_machine_crossed(&c->m, ev, fired) > 0;
     if (!*enterEventMode) model_machine_sides(&c->m, ev);
@@ -742,8 +755,12 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     }
     if (flag < 0) {
         c->mode = FAILED;
-        say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
-            model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
+        if (flag == IG_ERR_UNDER_FLOOR) {  /* the floor net: the message names the point and the time */
+            say(c, fmi2Error, "logStatusError", "%s", ig_solver_message(c->solver));
+        } else {
+            say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
+                model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
+        }
         return fmi2Error;
     }
     if (c->t_int < target) {  /* the run ended before the communication point */
