@@ -429,9 +429,10 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     const int touching = delta >= -MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
     const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
     if (fabs(rate) <= MODEL_TANGENTIAL_TOLERANCE * tip_speed) rate = 0.0;  /* a tangential start */
-    /* resting or grazing: no normal speed, but pulled into the surface (the free flight's
-     * d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in */
-    const int pulled_in = touching && rate == 0.0 &&
+    /* resting or grazing, running to a time: no normal speed, but pulled into the surface (the
+     * free flight's d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in
+     * (to the first separation, such a start is no impact: MODEL_START_ALONG) */
+    const int pulled_in = run_to_time && touching && rate == 0.0 &&
                           model_delta_acceleration(t, y, p) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
     if (touching && (rate > 0.0 || pulled_in)) {
         impact_begins(m, p, t, y, out);
