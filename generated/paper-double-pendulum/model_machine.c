@@ -345,6 +345,18 @@ static double chain_mass(const model_params *p)
     return p->m1 + p->m2;
 }
 
+/* Whether the tip at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
+ * the free chain pulls it into the surface (d2(delta)/dt2 beyond rounding of g): a resting or
+ * grazing contact, which no crossing of the contact event would announce. */
+static int pulled_in(const model_params *p, double t, const double *y, const double *out)
+{
+    const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
+    if (fabs(out[MODEL_OUT_delta_rate]) > MODEL_TANGENTIAL_TOLERANCE * tip_speed) return 0;
+    model_params free_flight = *p;
+    free_flight.phase = MODEL_PHASE_FREE;
+    return model_delta_acceleration(t, y, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
+}
+
 /* A new impact at (t, y), whose outputs under the force law so far are `out`. */
 static void impact_begins(model_machine *m, model_params *p, double t, const double *y,
                           const double *out)
@@ -414,9 +426,7 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     /* resting or grazing, running to a time: no normal speed, but pulled into the surface (the
      * free flight's d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in
      * (to the first separation, such a start is no impact: MODEL_START_ALONG) */
-    const int pulled_in = run_to_time && touching && rate == 0.0 &&
-                          model_delta_acceleration(t, y, p) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
-    if (touching && (rate > 0.0 || pulled_in)) {
+    if (touching && (rate > 0.0 || (run_to_time && pulled_in(p, t, y, out)))) {
         impact_begins(m, p, t, y, out);
         m->state = MODEL_MACHINE_ELASTIC;
         p->phase = law_of(m->state);
@@ -513,6 +523,11 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
         m->delta_r = delta_r;
         m->R_res = R_res;
         act |= MODEL_ACT_MAX_COMPRESSION;
+    }
+    if (next == MODEL_MACHINE_FREE && state == MODEL_MACHINE_RESTITUTION && pulled_in(p, t, y, out)) {
+        /* a grazing separation: the tip leaves the dent with no normal speed but is pulled back
+         * in, so the contact event (delta rising through 0) would never fire: it reloads */
+        next = MODEL_MACHINE_RELOADING;
     }
     if (next == MODEL_MACHINE_FREE) {
         m->t_end = t;
