@@ -78,11 +78,17 @@ def test_the_c_driver_reports_the_joint(tmp_path):
     _assert_joint_2_under_the_floor(ran.stderr)
 
 
-@pytest.mark.parametrize("kind", ["CoSimulation", "ModelExchange"])
-def test_the_fmu_reports_the_joint(tmp_path, kind):
-    fmpy = pytest.importorskip("fmpy")
+@pytest.fixture(scope="module")
+def three_link_fmu(tmp_path_factory) -> Path:
+    pytest.importorskip("fmpy")
     from impactgen.fmu.package import build_fmu
-    path = build_fmu(impactgen.load_scene("paper", THREE_LINKS), tmp_path / "three.fmu")
+    return build_fmu(impactgen.load_scene("paper", THREE_LINKS), tmp_path_factory.mktemp("fmu") / "three.fmu")
+
+
+@pytest.mark.parametrize("kind", ["CoSimulation", "ModelExchange"])
+def test_the_fmu_reports_the_joint(three_link_fmu, kind):
+    import fmpy
+    path = three_link_fmu
     errors: list[str] = []
 
     def logger(env, instance, status, category, message):
