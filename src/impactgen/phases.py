@@ -144,8 +144,6 @@ def _status(lib, scene: Scene, machine: Machine, ran: MachineRun, impacts: list[
     if ran.flag == lib.IG_REACHED_END:
         return _end_without_event(scene, impacts, STATES[ran.segments[-1].state])
     message = ran.message
-    if ran.flag == lib.IG_ERR_UNDER_FLOOR:  # the floor net: the message names the point and the time
-        return "failed", message
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
     return "failed", str(SolverError(message, STATES[machine.state.state], ran.t_last))

@@ -489,8 +489,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
             below = _under_floor(model, seg_t, seg_y)
             if below is not None:  # kept up to the sample found under the floor
                 rec.add(model, seg_t[:below[0] + 1], seg_y[:below[0] + 1], phase)
-                status, message = "failed", below[1]
-                break
+                raise SolverError(below[1], phase, float(seg_t[below[0]]))
             rec.add(model, seg_t, seg_y, phase)
             if seg.nsteps > scene.solver.max_steps:
                 raise SolverError(f"{seg.nsteps} steps in one phase, more than solver.max_steps = "

@@ -755,12 +755,8 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     }
     if (flag < 0) {
         c->mode = FAILED;
-        if (flag == IG_ERR_UNDER_FLOOR) {  /* the floor net: the message names the point and the time */
-            say(c, fmi2Error, "logStatusError", "%s", ig_solver_message(c->solver));
-        } else {
-            say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
-                model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
-        }
+        say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
+            model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
         return fmi2Error;
     }
     if (c->t_int < target) {  /* the run ended before the communication point */
