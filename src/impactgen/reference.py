@@ -373,8 +373,8 @@ def _under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[i
     point = int(np.flatnonzero(below[:, k])[0])
     name = "the tip" if point == n - 1 else f"joint {point + 1}"
     return k, (f"{name} is {-heights[point, k]:.3g} m below the surface at t = {t[k]:.6g} s (deeper than "
-               f"{100 * FLOOR_DEPTH:g} % of the shortest link): only the tip has a contact law, and the chain "
-               "may not pass through the surface")
+               f"{100 * FLOOR_DEPTH:g} % of the shortest link, beyond any contact's depth): the chain went "
+               "through the surface")
 
 
 @dataclass

@@ -598,7 +598,8 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
         *enterEventMode = fmi2False;
         *terminateSimulation = fmi2True;
         say(c, fmi2Error, "logStatusError", "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of "
-            "the shortest link): only the tip has a contact law", name, depth, c->t, 100.0 * MODEL_FLOOR_DEPTH);
+            "the shortest link, beyond any contact's depth): the chain went through the surface", name, depth, c->t,
+            100.0 * MODEL_FLOOR_DEPTH);
         return fmi2Error;
     }
     model_events(c->t, c->y, ev, &c->p);

@@ -40,8 +40,8 @@ static int under_floor(ig_solver *s, const model_params *p, double t, const doub
     if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);
     else snprintf(name, sizeof name, "the tip");
     snprintf(s->message, sizeof s->message,
-             "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of the shortest link): "
-             "only the tip has a contact law, and the chain may not pass through the surface",
+             "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of the shortest link, "
+             "beyond any contact's depth): the chain went through the surface",
              name, depth, t, 100.0 * MODEL_FLOOR_DEPTH);
     return 1;
 }
