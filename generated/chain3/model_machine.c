@@ -612,16 +612,26 @@ int model_machine_crossed(const model_machine *m, const double *ev, int *fired)
     return count;
 }
 
-int model_machine_below(const model_params *p, const double *y, double *depth)
+int model_machine_below(const model_params *p, const double *y, double *depth, double *margin)
 {
     double h[MODEL_NPOINT];
     const double shortest = fmin(p->L1, fmin(p->L2, p->L3));
+    double lowest = INFINITY;
     model_heights(y, h, p);
     for (int k = 0; k < MODEL_NPOINT; ++k) {
         if (h[k] < -MODEL_FLOOR_DEPTH * shortest) {
             *depth = -h[k];
+            *margin = 0.0;
             return k + 1;
         }
+        lowest = fmin(lowest, h[k]);
     }
+    *depth = 0.0;
+    *margin = lowest + MODEL_FLOOR_DEPTH * shortest;
     return 0;
+}
+
+double model_machine_speed_bound(const model_params *p, const double *y)
+{
+    return p->L1 * fabs(y[3]) + p->L2 * fabs(y[4]) + p->L3 * fabs(y[5]);
 }

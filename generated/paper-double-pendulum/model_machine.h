@@ -155,8 +155,12 @@ int model_machine_crossed(const model_machine *m, const double *ev, int *fired);
 const char *model_machine_state_name(int state);
 /* The floor net, after each accepted step: the first point of the chain (1 to 1: that
  * joint, 2: the tip; model_heights' order) found deeper below the surface than
- * MODEL_FLOOR_DEPTH of the shortest link, with its depth in *depth, m; 0 when none is. */
-int model_machine_below(const model_params *p, const double *y, double *depth);
+ * MODEL_FLOOR_DEPTH of the shortest link, with its depth in *depth, m; 0 when none is,
+ * with in *margin how far the lowest point may still move down before it is, m. */
+int model_machine_below(const model_params *p, const double *y, double *depth, double *margin);
+/* A bound of the speed of every point of the chain, sum L_i |u_i|, m/s: with the margin of
+ * model_machine_below, when the heights need computing again. */
+double model_machine_speed_bound(const model_params *p, const double *y);
 
 #ifdef __cplusplus
 }

@@ -588,8 +588,8 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
     /* an importer that does not locate roots still gets its events at the next step */
     double ev[MODEL_NEVENT];
     int fired[MODEL_NEVENT];
-    double depth = 0.0;
-    const int point = model_machine_below(&c->p, c->y, &depth);  /* the floor net, as ig_run's */
+    double depth = 0.0, margin = 0.0;
+    const int point = model_machine_below(&c->p, c->y, &depth, &margin);  /* the floor net, as ig_run's */
     if (point != 0) {
         char name[32];
         if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);

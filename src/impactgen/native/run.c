@@ -3,6 +3,7 @@
  * solver.h): the one driver of the machine, for the Python engine, the C driver and the
  * FMU's Co-Simulation step.
  */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -15,6 +16,7 @@ static int begin_segment(ig_solver *s, const model_machine *m, const model_param
     int events[MODEL_NEVENT], directions[MODEL_NEVENT];
     const int watched = model_machine_events(m, events, directions);
     if (s->analytic && ig_solver_use_jacobian(s, !model_machine_constrained(m)) != 0) return IG_ERR_SOLVER;
+    s->net_margin = 0.0;  /* the surface may have moved (lift-off): the heights at the next step */
     return ig_segment_start(s, p, t, y, t_stop, events, directions, watched);
 }
 
@@ -30,11 +32,26 @@ static int write_sample(ig_solver *s, const model_params *p, double t, const dou
 }
 
 /* The floor net (model_machine_below): 1, with the message naming the point, when a joint or the
- * tip is below the surface at (t, y) by more than the contact-scale depth; else 0. */
+ * tip is below the surface at (t, y) by more than the contact-scale depth; else 0. The heights
+ * (a sine per link) are computed again only once the distance the points may have moved since,
+ * bounded by twice the larger speed bound of the two ends of each step, reaches the margin the
+ * last computation left (a step's speeds do not double within it); s->net_margin 0 computes
+ * them at once. */
 static int under_floor(ig_solver *s, const model_params *p, double t, const double *y)
 {
-    double depth = 0.0;
-    const int point = model_machine_below(p, y, &depth);
+    const double speed = model_machine_speed_bound(p, y);
+    if (s->net_margin > 0.0) {
+        s->net_travel += fabs(t - s->net_t) * 2.0 * fmax(speed, s->net_speed);
+        s->net_t = t;
+        s->net_speed = speed;
+        if (s->net_travel < s->net_margin) return 0;
+    }
+    double depth = 0.0, margin = 0.0;
+    const int point = model_machine_below(p, y, &depth, &margin);
+    s->net_margin = margin;
+    s->net_travel = 0.0;
+    s->net_t = t;
+    s->net_speed = speed;
     if (point == 0) return 0;
     char name[32];
     if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);
@@ -156,6 +173,7 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
     t_buf[0] = t0;
     const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
     model_outputs(t0, y_buf, out_buf, p);
+    s->net_margin = 0.0;  /* a new run: its heights at once */
     ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
     model_machine_atol(m, p, rtol, atol, atol_now);

@@ -26,6 +26,9 @@ struct ig_solver {
     int active;                /* a segment is under way */
     int root_pending;          /* ig_run: the last step ended at a root beyond t_target, not yet switched */
     int pending_roots[MODEL_NEVENT];
+    /* ig_run's floor net (run.c): the heights are computed again only once the points may
+     * have moved as far as the margin the last computation left (0: compute at the next step) */
+    double net_margin, net_travel, net_t, net_speed;
     char message[IG_MESSAGE_SIZE];
 };
 
