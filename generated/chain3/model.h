@@ -99,9 +99,9 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p);
  * the links (1 to 2) then the tip. h[k] = their heights above the surface y_s. */
 #define MODEL_NPOINT 3
 void model_heights(const double *y, double *h, const model_params *p);
-/* d2(delta)/dt2 at (t, y) under p's force law: the tip's acceleration into the surface (the
- * start rule of a tip resting on it); NaN where model_rhs fails. */
-double model_delta_acceleration(double t, const double *y, const model_params *p);
+/* d2(delta)/dt2 at y, given ydot = dy/dt (from model_rhs): the tip's acceleration into
+ * the surface (the start rule of a tip resting on it). */
+double model_delta_acceleration(const double *y, const double *ydot, const model_params *p);
 
 #ifdef __cplusplus
 }

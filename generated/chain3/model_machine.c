@@ -371,8 +371,10 @@ static int pulled_in(const model_params *p, double t, const double *y, const dou
     const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
     if (fabs(out[MODEL_OUT_delta_rate]) > MODEL_TANGENTIAL_TOLERANCE * tip_speed) return 0;
     model_params free_flight = *p;
+    double ydot[MODEL_NSTATE];
     free_flight.phase = MODEL_PHASE_FREE;
-    return model_delta_acceleration(t, y, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
+    if (model_rhs(t, y, ydot, &free_flight) != 0) return 0;
+    return model_delta_acceleration(y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
 }
 
 /* A new impact at (t, y), whose outputs under the force law so far are `out`. */

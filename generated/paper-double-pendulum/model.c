@@ -484,10 +484,8 @@ void model_heights(const double *y, double *h, const model_params *p)
 
 }
 
-double model_delta_acceleration(double t, const double *y, const model_params *p)
+double model_delta_acceleration(const double *y, const double *ydot, const model_params *p)
 {
-    double ydot[MODEL_NSTATE];
-    if (model_rhs(t, y, ydot, p) != 0) return NAN;
     const double q1 = y[0];
     const double q2 = y[1];
     const double u1 = y[2];
