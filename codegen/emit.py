@@ -218,6 +218,7 @@ class EmitContext:
     laws: machine.SwitchLaws
     param_names: list[str]
     cdef: bool = False  # rendering declarations for cffi (no string or float #defines)
+    net: dict | None = None  # the floor net's heights and the start rule's normal acceleration
 
     @property
     def PREFIX(self) -> str:  # noqa: N802 (the C macros' spelling)
@@ -319,7 +320,19 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         state_laws=[(s, STATE_LAW[s]) for s in STATES if s in present],
         material_inputs=tuple(str(x) for x in law.MATERIAL_INPUTS), laws=machine.switch_laws(model, ccode),
         param_names=[f.name for f in params],
+        net=_net(model, t),
     )
+
+
+def _net(model: ModelExpressions, t) -> dict:
+    """The heights above the surface of the joints and the tip (the floor net), and the
+    gradient of d(delta)/dt over the state (the tip's normal acceleration, for the start rule),
+    as blocks with what they unpack."""
+    heights = c_block([(f"h[{k}]", t(h.expr)) for k, h in enumerate(model.heights)], "ht")
+    gradient = c_block([(f"g[{k}]", t(e)) for k, e in enumerate(model.rate_gradient)], "rg")
+    return {"points": [h.name for h in model.heights], "heights": heights,
+            "heights_kernel": _kernel(model, [heights]), "gradient": gradient,
+            "gradient_kernel": _kernel(model, [gradient])}
 
 
 def _tidy(text: str) -> str:

@@ -85,6 +85,8 @@ class ModelExpressions:
     # each contact force itself, integrated as states after the works: the impulses
     # P_normal[, P_friction] that the impact coefficients are made of (docs/model.md section 9)
     impulses: tuple[Named, ...] = ()
+    heights: tuple[Named, ...] = ()  # joints 1..n-1, then the tip: height above the surface (floor net)
+    rate_gradient: tuple[sm.Expr, ...] = ()  # d(delta_rate)/d(q, u): the tip's normal acceleration
 
     @property
     def integrals(self) -> tuple[Named, ...]:
@@ -184,7 +186,16 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     jacobian = _jacobian(chain, forcing, tuple(cases), friction_force, tuple(works + impulses)) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign,
                             _tip_jacobian(chain) if spec.constrained else (), tuple(events),
-                            tuple(outputs), tuple(works), params, jacobian, tuple(impulses))
+                            tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain),
+                            tuple(-v_By.diff(x) for x in s.q + s.u))
+
+
+def _heights(chain: ChainEquations) -> tuple[Named, ...]:
+    """The height above the surface of every point that can go under it: each joint between
+    two links, then the tip (what the floor net of the run checks after every step)."""
+    joints = [Named(f"joint{i + 1}", y - y_s, f"height of joint {i + 1} above the surface, m")
+              for i, y in enumerate(chain.joint_y)]
+    return tuple(joints) + (Named("tip", chain.tip_position[1] - y_s, "height of the tip above the surface, m"),)
 
 
 def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:

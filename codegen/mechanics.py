@@ -58,6 +58,7 @@ class ChainEquations:
     tip_velocity: tuple[sm.Expr, sm.Expr]  # v_Bx, v_By
     kinetic_energy: tuple[sm.Expr, ...]  # T_i per link
     potential_energy: sm.Expr  # V
+    joint_y: tuple[sm.Expr, ...] = ()  # y of the joints between the links (1 to n - 1): the floor net
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,9 @@ def derive_chain(n: int) -> ChainEquations:
         kinetic_energy=tuple(to_plain(b.kinetic_energy(N)) for b in bodies),
         potential_energy=to_plain(sum(b.mass * s.g * b.masscenter.pos_from(O).dot(N.y)
                                       for b in bodies)),
+        # joint i ends link i: its centre plus half its length along the link
+        joint_y=tuple(to_plain((b.masscenter.pos_from(O) + s.L[i] / 2 * b.frame.x).dot(N.y))
+                      for i, b in enumerate(bodies[:-1])),
     )
 
 
@@ -184,7 +188,8 @@ def closed_form_chain(n: int) -> ChainEquations:
         T.append(s.m[i] * v2 / 2 + s.m[i] * s.L[i] ** 2 / 24 * s.u[i] ** 2)
         V.append(s.m[i] * s.g * sm.Add(*(arm[j] * si[j] for j in range(i + 1))))
     return ChainEquations(n=n, symbols=s, mass_matrix=M, forcing=f, tip_position=(x_B, y_B),
-                          tip_velocity=(v_Bx, v_By), kinetic_energy=tuple(T), potential_energy=sm.Add(*V))
+                          tip_velocity=(v_Bx, v_By), kinetic_energy=tuple(T), potential_energy=sm.Add(*V),
+                          joint_y=tuple(sm.Add(*(s.L[j] * si[j] for j in range(i + 1))) for i in range(n - 1)))
 
 
 def chain_equations(n: int) -> ChainEquations:

@@ -35,6 +35,9 @@ THRESHOLDS = (
     Threshold("YIELD_ONSET", 1.9,
               "the Hertz law (phase I) holds up to this many critical deformations delta_c; the "
               "Jackson-Green law (phase II, Eq. 10) beyond"),
+    Threshold("FLOOR_DEPTH", 1e-2,
+              "a joint or the tip found deeper than this fraction of the chain's shortest link "
+              "below the surface, after any step, ends the run as failed (the floor net)"),
     Threshold("ANGLE_ATOL_FLOOR", 1e-15,
               "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
     Threshold("QUADRATURE_ATOL", 1e300,

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import impactgen
+from impactgen.validity import ENERGY_FLOOR, ENERGY_MARGIN, energy_warning
 from impactgen.laws import YIELD_ONSET, contact_constants
 from conftest import PAPER
 
@@ -158,22 +159,30 @@ def test_an_impact_finer_than_the_tolerance_resolves_carries_a_warning():
 
 
 def test_a_run_whose_energy_budget_does_not_close_says_so():
-    """Stiff regularized friction at a loose tolerance: BDF's error test passes while the
-    works miss the change of kinetic energy by 9 % to 21 % of T0 (eps = 1e-11 over four
-    nearby starts; at eps = 1e-10 how far it misses turns on the last bits: docs/stability.md).
+    """Stiff regularized friction at a loose tolerance: the error test passes while the works
+    can miss the change of kinetic energy by several % of T0. How far a given run misses
+    turns on the last bits (docs/stability.md), so three such runs are made: each that misses
+    its budget must say so, and at least one of them misses by more than 1 % of T0.
     The run is not a failure, but its numbers must not be silent."""
+    missed = 0
+    for method, rtol, eps in (("bdf", 1e-8, 1e-11), ("bdf", 1e-7, 1e-11), ("auto", 1e-8, 1e-10)):
+        loose = {"solver.rtol": rtol, "solver.atol": rtol * 1e-2, "contact.friction": 2.0,
+                 "contact.friction_eps": eps}
+        result = impactgen.simulate(impactgen.load_scene(PAPER, overrides=loose), method=method)
+        assert result.status == "ok"
+        s, e = result.summary, result.summary["energy"]
+        scale = max(abs(s["T0"]), abs(s["Tf"]), *(abs(e[k]) for k in ("W_normal", "W_friction", "W_gravity")))
+        if abs(e["residual"]) > max(ENERGY_MARGIN * rtol, ENERGY_FLOOR) * scale:
+            assert any("energy budget does not close" in w and "friction_eps" in w for w in result.warnings)
+        missed += abs(e["residual"]) > 0.01 * s["T0"]
+    assert missed >= 1
     loose = {"solver.rtol": 1e-8, "solver.atol": 1e-10, "contact.friction": 2.0, "contact.friction_eps": 1e-11}
-    result = impactgen.simulate(impactgen.load_scene(PAPER, overrides=loose), method="bdf")
-    assert result.status == "ok"
-    assert abs(result.summary["energy"]["residual"]) > 0.01 * result.summary["T0"]
-    assert any("energy budget does not close" in w and "friction_eps" in w for w in result.warnings)
     tight = {**loose, "solver.rtol": 1e-10, "solver.atol": 1e-12}
     assert not any("energy budget" in w
                    for w in impactgen.simulate(impactgen.load_scene(PAPER, overrides=tight), method="bdf").warnings)
     # the reference engine's runs are checked the same way, from its summary
     assert impactgen.simulate(impactgen.load_scene(PAPER), engine="reference").warnings == []
     # the bound: ENERGY_MARGIN rtol of the budget's largest term
-    from impactgen.validity import ENERGY_MARGIN, energy_warning
     scene = impactgen.load_scene(PAPER)
     bound = ENERGY_MARGIN * scene.solver.rtol * 2.0  # T0 = 2 J is the largest term below
     assert energy_warning(scene, 2.0, 1.0, -0.5, -0.5, 0.0, 0.9 * bound) == []

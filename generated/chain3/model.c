@@ -616,3 +616,55 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     }
     return 0;
 }
+
+void model_heights(const double *y, double *h, const model_params *p)
+{
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double q3 = y[2];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double L3 = p->L3;
+    const double y_s = p->y_s;
+    const double sin_q1 = sin(q1);
+    const double sin_q2 = sin(q2);
+    const double sin_q3 = sin(q3);
+
+    const double ht0 = L1*sin_q1 - y_s;
+    const double ht1 = L2*sin_q2 + ht0;
+    h[0] = ht0;
+    h[1] = ht1;
+    h[2] = L3*sin_q3 + ht1;
+
+}
+
+double model_delta_acceleration(const double *y, const double *ydot, const model_params *p)
+{
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double q3 = y[2];
+    const double u1 = y[3];
+    const double u2 = y[4];
+    const double u3 = y[5];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double L3 = p->L3;
+    const double sin_q1 = sin(q1);
+    const double cos_q1 = cos(q1);
+    const double sin_q2 = sin(q2);
+    const double cos_q2 = cos(q2);
+    const double sin_q3 = sin(q3);
+    const double cos_q3 = cos(q3);
+
+    double g[6];
+    g[0] = L1*sin_q1*u1;
+    g[1] = L2*sin_q2*u2;
+    g[2] = L3*sin_q3*u3;
+    g[3] = -L1*cos_q1;
+    g[4] = -L2*cos_q2;
+    g[5] = -L3*cos_q3;
+
+    double a = 0.0;
+    for (int k = 0; k < 6; ++k) a += g[k] * ydot[k];
+    return a;
+}

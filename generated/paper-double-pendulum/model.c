@@ -479,3 +479,43 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     }
     return 0;
 }
+
+void model_heights(const double *y, double *h, const model_params *p)
+{
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double y_s = p->y_s;
+    const double sin_q1 = sin(q1);
+    const double sin_q2 = sin(q2);
+
+    const double ht0 = L1*sin_q1 - y_s;
+    h[0] = ht0;
+    h[1] = L2*sin_q2 + ht0;
+
+}
+
+double model_delta_acceleration(const double *y, const double *ydot, const model_params *p)
+{
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double u1 = y[2];
+    const double u2 = y[3];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double sin_q1 = sin(q1);
+    const double cos_q1 = cos(q1);
+    const double sin_q2 = sin(q2);
+    const double cos_q2 = cos(q2);
+
+    double g[4];
+    g[0] = L1*sin_q1*u1;
+    g[1] = L2*sin_q2*u2;
+    g[2] = -L1*cos_q1;
+    g[3] = -L2*cos_q2;
+
+    double a = 0.0;
+    for (int k = 0; k < 4; ++k) a += g[k] * ydot[k];
+    return a;
+}

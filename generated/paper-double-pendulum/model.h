@@ -98,6 +98,13 @@ void model_events(double t, const double *y, double *ev, const model_params *p);
 void model_outputs(double t, const double *y, double *out, const model_params *p);
 /* J[i * NSTATE + j] = d ydot_i / d y_j (row-major); returns as model_rhs does. */
 int model_jacobian(double t, const double *y, double *J, const model_params *p);
+/* The floor net: the points of the chain that can go under the surface, the joints between
+ * the links (1 to 1) then the tip. h[k] = their heights above the surface y_s. */
+#define MODEL_NPOINT 2
+void model_heights(const double *y, double *h, const model_params *p);
+/* d2(delta)/dt2 at y, given ydot = dy/dt (from model_rhs): the tip's acceleration into
+ * the surface (the start rule of a tip resting on it). */
+double model_delta_acceleration(const double *y, const double *ydot, const model_params *p);
 
 #ifdef __cplusplus
 }

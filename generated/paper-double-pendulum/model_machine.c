@@ -345,6 +345,20 @@ static double chain_mass(const model_params *p)
     return p->m1 + p->m2;
 }
 
+/* Whether the tip at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
+ * the free chain pulls it into the surface (d2(delta)/dt2 beyond rounding of g): a resting or
+ * grazing contact, which no crossing of the contact event would announce. */
+static int pulled_in(const model_params *p, double t, const double *y, const double *out)
+{
+    const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
+    if (fabs(out[MODEL_OUT_delta_rate]) > MODEL_TANGENTIAL_TOLERANCE * tip_speed) return 0;
+    model_params free_flight = *p;
+    double ydot[MODEL_NSTATE];
+    free_flight.phase = MODEL_PHASE_FREE;
+    if (model_rhs(t, y, ydot, &free_flight) != 0) return 0;
+    return model_delta_acceleration(y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
+}
+
 /* A new impact at (t, y), whose outputs under the force law so far are `out`. */
 static void impact_begins(model_machine *m, model_params *p, double t, const double *y,
                           const double *out)
@@ -369,16 +383,20 @@ static void impact_begins(model_machine *m, model_params *p, double t, const dou
     const double m_total = chain_mass(p);
     const double m_eff = v_tip2 > 0.0 ? fmin(2.0 * T / v_tip2, m_total) : m_total;
     const double v_n = fmax(out[MODEL_OUT_delta_rate], 0.0);
-    const double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(p->R)), 0.4);
-    double speed = 0.0;
+    double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(p->R)), 0.4);
+    double speed = 0.0, energy = T;
     for (int i = 0; i < 2; ++i) speed = fmax(speed, fabs(y[2 + i]));
+    if (!(delta_est > 0.0)) {  /* a resting or grazing start: the scales of settling under the chain's weight */
+        delta_est = pow(3.0 * m_total * p->g / (4.0 * p->E_star * sqrt(p->R)), 2.0 / 3.0);
+        speed = fmax(speed, sqrt(2.0 * p->g * delta_est) / chain_length(p));
+        energy = fmax(energy, m_total * p->g * delta_est);
+    }
     for (int i = 0; i < 2; ++i) {
         m->scale[i] = MODEL_ANGLE_RESOLUTION * delta_est / chain_length(p);
         m->scale[2 + i] = speed;
     }
-    for (int i = 4; i < MODEL_NSTATE; ++i) m->scale[i] = T;
-    /* the impulses (after the works): the momentum m_eff |v_B| the impact takes out, sqrt(2 T m_eff) */
-    for (int i = MODEL_Y_P_normal; i < MODEL_NSTATE; ++i) m->scale[i] = sqrt(2.0 * T * m_eff);
+    /* the works (the impulses after them are left out of the error test: machine_atol) */
+    for (int i = 4; i < MODEL_NSTATE; ++i) m->scale[i] = energy;
 }
 
 int model_machine_start(model_machine *m, model_params *p, double t, const double *y,
@@ -408,7 +426,10 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     const int touching = delta >= -MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
     const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
     if (fabs(rate) <= MODEL_TANGENTIAL_TOLERANCE * tip_speed) rate = 0.0;  /* a tangential start */
-    if (touching && rate > 0.0) {
+    /* resting or grazing, running to a time: no normal speed, but pulled into the surface (the
+     * free flight's d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in
+     * (to the first separation, such a start is no impact: MODEL_START_ALONG) */
+    if (touching && (rate > 0.0 || (run_to_time && pulled_in(p, t, y, out)))) {
         impact_begins(m, p, t, y, out);
         m->state = MODEL_MACHINE_ELASTIC;
         p->phase = law_of(m->state);
@@ -506,6 +527,11 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
         m->R_res = R_res;
         act |= MODEL_ACT_MAX_COMPRESSION;
     }
+    if (next == MODEL_MACHINE_FREE && state == MODEL_MACHINE_RESTITUTION && pulled_in(p, t, y, out)) {
+        /* a grazing separation: the tip leaves the dent with no normal speed but is pulled back
+         * in, so the contact event (delta rising through 0) would never fire: it reloads */
+        next = MODEL_MACHINE_RELOADING;
+    }
     if (next == MODEL_MACHINE_FREE) {
         m->t_end = t;
         act |= MODEL_ACT_IMPACT_END | MODEL_ACT_TOLERANCES;
@@ -573,4 +599,19 @@ int model_machine_crossed(const model_machine *m, const double *ev, int *fired)
         count += fired[k];
     }
     return count;
+}
+
+int model_machine_below(const model_params *p, const double *y, double *depth)
+{
+    double h[MODEL_NPOINT];
+    const double shortest = fmin(p->L1, p->L2);
+    model_heights(y, h, p);
+    for (int k = 0; k < MODEL_NPOINT; ++k) {
+        if (h[k] < -MODEL_FLOOR_DEPTH * shortest) {
+            *depth = -h[k];
+            return k + 1;
+        }
+    }
+    *depth = 0.0;
+    return 0;
 }

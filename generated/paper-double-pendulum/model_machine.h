@@ -43,6 +43,7 @@ extern "C" {
 #define MODEL_ANGLE_RESOLUTION 0.01  /* inside an impact the angles are resolved to this fraction of the expected penetration (over the chain's length) */
 #define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (judged at the end of each segment from every step: the machine's observer) */
 #define MODEL_YIELD_ONSET 1.9  /* the Hertz law (phase I) holds up to this many critical deformations delta_c; the Jackson-Green law (phase II, Eq. 10) beyond */
+#define MODEL_FLOOR_DEPTH 0.01  /* a joint or the tip found deeper than this fraction of the chain's shortest link below the surface, after any step, ends the run as failed (the floor net) */
 #define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
 #define MODEL_QUADRATURE_ATOL 1e+300  /* absolute tolerance of the impulses, N s: they are quadratures of the contact forces that feed nothing back, so, as CVODES leaves quadratures out of its error test by default, they do not set the step (finite: CVODE's error weights must be positive) */
 
@@ -153,6 +154,10 @@ void model_machine_sides(model_machine *m, const double *ev);
 int model_machine_crossed(const model_machine *m, const double *ev, int *fired);
 /* The name of a machine state ("free", "elastic", ...). */
 const char *model_machine_state_name(int state);
+/* The floor net, after each accepted step: the first point of the chain (1 to 1: that
+ * joint, 2: the tip; model_heights' order) found deeper below the surface than
+ * MODEL_FLOOR_DEPTH of the shortest link, with its depth in *depth, m; 0 when none is. */
+int model_machine_below(const model_params *p, const double *y, double *depth);
 
 #ifdef __cplusplus
 }

@@ -362,6 +362,27 @@ def solve_ivp_segment(model: "ReferenceModel", phase: str, t0: float, y0: np.nda
     return Segment(seg_t, seg_y, fired, len(sol.t) - 1, sol.nfev, sol.njev, sol.sol)
 
 
+FLOOR_DEPTH = 0.01  # the floor net: deeper than this fraction of the shortest link below the surface fails
+
+
+def _under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[int, str] | None:
+    """The floor net, written again from the chain: joint k's height is sum_{i <= k} L_i sin q_i
+    (the tip's is the whole sum). The first sample where a joint or the tip lies deeper below
+    the surface than FLOOR_DEPTH of the shortest link, and the message naming it; None if none."""
+    n = model.n
+    heights = np.cumsum(model.chain.L[:, None] * np.sin(y[:, :n].T), axis=0) - model.contact.y_s
+    below = heights < -FLOOR_DEPTH * model.chain.L.min()
+    hits = np.flatnonzero(below.any(axis=0))
+    if not len(hits):
+        return None
+    k = int(hits[0])
+    point = int(np.flatnonzero(below[:, k])[0])
+    name = "the tip" if point == n - 1 else f"joint {point + 1}"
+    return k, (f"{name} is {-heights[point, k]:.3g} m below the surface at t = {t[k]:.6g} s (deeper than "
+               f"{100 * FLOOR_DEPTH:g} % of the shortest link, beyond any contact's depth): the chain went "
+               "through the surface")
+
+
 @dataclass
 class _Recorder:
     t: list = field(default_factory=list)
@@ -474,6 +495,10 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
             stats["nfev"] += seg.nfev
             stats["njev"] += seg.njev
             fired, seg_t, seg_y = seg.fired, seg.t, seg.y
+            below = _under_floor(model, seg_t, seg_y)
+            if below is not None:  # kept up to the sample found under the floor
+                rec.add(model, seg_t[:below[0] + 1], seg_y[:below[0] + 1], phase)
+                raise SolverError(below[1], phase, float(seg_t[below[0]]))
             rec.add(model, seg_t, seg_y, phase)
             if seg.nsteps > scene.solver.max_steps:
                 raise SolverError(f"{seg.nsteps} steps in one phase, more than solver.max_steps = "

@@ -588,6 +588,20 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
     /* an importer that does not locate roots still gets its events at the next step */
     double ev[MODEL_NEVENT];
     int fired[MODEL_NEVENT];
+    double depth = 0.0;
+    const int point = model_machine_below(&c->p, c->y, &depth);  /* the floor net, as ig_run's */
+    if (point != 0) {
+        char name[32];
+        if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);
+        else snprintf(name, sizeof name, "the tip");
+        c->mode = FAILED;
+        *enterEventMode = fmi2False;
+        *terminateSimulation = fmi2True;
+        say(c, fmi2Error, "logStatusError", "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of "
+            "the shortest link, beyond any contact's depth): the chain went through the surface", name, depth, c->t,
+            100.0 * MODEL_FLOOR_DEPTH);
+        return fmi2Error;
+    }
     model_events(c->t, c->y, ev, &c->p);
     *enterEventMode = model_machine_crossed(&c->m, ev, fired) > 0;
     if (!*enterEventMode) model_machine_sides(&c->m, ev);

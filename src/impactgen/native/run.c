@@ -3,6 +3,8 @@
  * solver.h): the one driver of the machine, for the Python engine, the C driver and the
  * FMU's Co-Simulation step.
  */
+#include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "solver_state.h"
@@ -28,6 +30,24 @@ static int write_sample(ig_solver *s, const model_params *p, double t, const dou
     return 0;
 }
 
+/* The floor net (model_machine_below): 1, with the message naming the point, when a joint or the
+ * tip is below the surface at (t, y) by more than the contact-scale depth; else 0. Checked
+ * after every accepted step: a sine per link, against a step's dozen. */
+static int under_floor(ig_solver *s, const model_params *p, double t, const double *y)
+{
+    double depth = 0.0;
+    const int point = model_machine_below(p, y, &depth);
+    if (point == 0) return 0;
+    char name[32];
+    if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);
+    else snprintf(name, sizeof name, "the tip");
+    snprintf(s->message, sizeof s->message,
+             "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of the shortest link, "
+             "beyond any contact's depth): the chain went through the surface",
+             name, depth, t, 100.0 * MODEL_FLOOR_DEPTH);
+    return 1;
+}
+
 /* ig_run's loop over the segments (solver.h); ig_run then notes its last sample in the
  * tally, whichever way the loop returned. */
 static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
@@ -44,6 +64,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
                          "the samples already in them, 0 for emptied buffers)");
         return IG_ERR_USAGE;
     }
+    if (under_floor(s, p, *t, y)) return IG_ERR_UNDER_FLOOR;
     if (!s->root_pending && *t >= t_target) return IG_TARGET;
     for (;;) {
         int flag;
@@ -70,6 +91,14 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
                 flag = ig_solver_step(s, t, y, roots_found);
                 if (flag < 0) return flag;
                 model_machine_observe(m, p, *t, y);
+                if (under_floor(s, p, *t, y)) {  /* the step is kept as the last sample */
+                    s->active = 0;
+                    if (write_sample(s, p, *t, y, t_buf, y_buf, out_buf, every_step ? dense_buf : NULL,
+                                     n_written) != 0) {
+                        return IG_ERR_SOLVER;
+                    }
+                    return IG_ERR_UNDER_FLOOR;
+                }
                 if (flag == IG_ROOT && *t > t_target) {  /* switched at the next call, after t_target */
                     memcpy(s->pending_roots, roots_found, sizeof roots_found);
                     s->root_pending = 1;

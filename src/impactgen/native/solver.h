@@ -30,6 +30,7 @@
 #define IG_SEGMENTS_FULL 4   /* ig_run: the segment records are full: call again to continue */
 #define IG_ERR_STICK -4      /* ig_run: a stuck tip needed more than mu F: a slip event was missed */
 #define IG_ERR_SEGMENTS -5   /* ig_run: more segments than allowed (chattering impacts?) */
+#define IG_ERR_UNDER_FLOOR -6  /* ig_run: a joint or the tip went below the surface (the floor net) */
 #define IG_TARGET 5          /* ig_run: the step that reached t_target is taken (ig_interpolate there) */
 /* Methods of ig_solver_new (callers name them: Python reads IG_METHOD_<NAME> from the
  * library): CVODE's BDF and Adams, ARKODE's explicit Runge-Kutta pair, or the same pair
@@ -129,7 +130,11 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
  * IG_TARGET past t_target, IG_BUFFER_FULL or IG_SEGMENTS_FULL when the buffers hold capacity
  * samples or segment_capacity segments are written (call again with emptied buffers to
  * continue), or < 0 on a failure (ig_solver_message says why; the samples up to it are
- * written): IG_ERR_STICK when a stuck tip needed more than mu F (a slip event was missed).
+ * written): IG_ERR_STICK when a stuck tip needed more than mu F (a slip event was missed),
+ * IG_ERR_UNDER_FLOOR when a joint or the tip is found below the surface by more than
+ * MODEL_FLOOR_DEPTH of the shortest link at the start of the call or after a step (the floor
+ * net, model_machine_below: the message names the point, its depth and the time; the sample
+ * there is written).
  * *n_written: the samples already in the buffers on entry (1 after ig_run_begin wrote the
  * start; 0 in emptied buffers), written after, and less than capacity (IG_ERR_USAGE
  * otherwise); on return, the samples in them (segments[k].sample indexes them). At most
