@@ -110,7 +110,7 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         settings = {k: v for k, v in given.items() if v is not None}
         if method is not None and engine == "c":
             settings["method"] = _c_method(method)
-        if settings:  # only the values given are checked: the rest of the scene was already
+        if settings:  # only the values given are checked: the rest of the scene was checked already
             scene = with_solver(scene, settings)
     times = _checked_times(t_eval, scene) if t_eval is not None else None
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)

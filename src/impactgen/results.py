@@ -130,7 +130,7 @@ def impact_coefficients(begin, at_max, end, v_n0: float, v_n1: float) -> dict[st
     """The impulses and coefficients (COEFFICIENTS) of an impact from its integrated states
     (dicts of integral_names: the works and the impulses) at its start, at its maximum
     compression and at its end, and the normal speed at its start and end. The C engine
-    tallies the same arithmetic (cvode_glue.c, summarize_coefficients)."""
+    tallies the same arithmetic (tally.c, summarize_coefficients)."""
     W_c, W_r = at_max["W_normal"] - begin["W_normal"], end["W_normal"] - at_max["W_normal"]
     W_f = end.get("W_friction", 0.0) - begin.get("W_friction", 0.0)
     P_c, P_r = at_max["P_normal"] - begin["P_normal"], end["P_normal"] - at_max["P_normal"]
