@@ -219,6 +219,7 @@ class EmitContext:
     param_names: list[str]
     cdef: bool = False  # rendering declarations for cffi (no string or float #defines)
     net: dict | None = None  # the floor net's heights and the start rule's normal acceleration
+    joints: dict | None = None  # contact at the joints: motion kernels, friction, events, outputs
 
     @property
     def PREFIX(self) -> str:  # noqa: N802 (the C macros' spelling)
@@ -305,11 +306,13 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
                "udot": udot_used}
 
     params = model.params
+    joints = _joints(model, t) if model.joints else None
     present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
     return EmitContext(
         prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
         params=model.params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
-        outputs=[(o.name, o.doc) for o in model.outputs], rhs=_kernel(model, rhs_blocks), rhs_tip=rhs_tip,
+        outputs=[(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else []),
+        rhs=_kernel(model, rhs_blocks), rhs_tip=rhs_tip,
         kane=kane, friction_block=friction, constrained=spec.constrained, tip_jacobian=tip_jacobian,
         tip_jacobian_x=tip_jacobian_x, event_forces=event_forces, works=works,
         events_kernel=_kernel(model, [ev_tip], tuple(e.expr for e in model.events)), ev_tip=ev_tip,
@@ -321,7 +324,52 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         material_inputs=tuple(str(x) for x in law.MATERIAL_INPUTS), laws=machine.switch_laws(model, ccode),
         param_names=[f.name for f in params],
         net=_net(model, t),
+        joints=joints,
     )
+
+
+# What a joint's contact adds to the model, per joint, in this order: its outputs (the tip's
+# are named x_B, delta, F, ...), and the fields of its contact state in the parameters: the
+# machine's (phase aside) and the constants its own radius gives (`<prefix>_derive`).
+POINT_OUTPUTS = (("delta", "penetration, m"), ("delta_rate", "d(delta)/dt, m/s"), ("v_x", "velocity x, m/s"),
+                 ("v_y", "velocity y, m/s"), ("F", "normal contact force, N"), ("F_f", "friction force along x, N"))
+POINT_FIELDS = ("y_s", "R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res", "s_frozen")
+
+
+def _joints(model: ModelExpressions, t) -> dict:
+    """The joints that can touch the surface, as the templates print them: each one's motion
+    (a block per joint), the friction law and the tip's events in its own quantities (`pt`,
+    from <prefix>_joint_forces) and its own contact state and constants (`at`, the
+    parameters as the joint sees them), and the outputs per joint."""
+    from .expressions import TIP
+    spec = model.spec
+    names = {f.name for f in model.params}
+    motion = []
+    for k, jm in enumerate(model.joints):
+        block = c_block([(f"m->{r.name}", t(r.expr)) for r in jm.motion], "jm")
+        motion.append({"k": k, "joint": jm.joint, "block": block, "kernel": _kernel(model, [block])})
+    v_x = sm.Symbol("v_x")
+    friction = None
+    if model.friction_force is not None:
+        s_f = sm.Symbol("s")
+        sign = sm.sympify(model.friction_sign).xreplace({TIP["v_Bx"]: v_x})
+        friction = c_block([("s", sign), ("F_f", model.friction_force.subs(model.friction_sign, s_f))], "fr")
+    own = {TIP["delta"]: sm.Symbol("pt.delta"), TIP["delta_rate"]: sm.Symbol("pt.delta_rate"),
+           TIP["v_Bx"]: sm.Symbol("pt.v_x"), model.chain.symbols.F: sm.Symbol("pt.F"),
+           model.chain.symbols.F_f: sm.Symbol("pt.F_f")}
+    events = []
+    for e in model.events:
+        expr = sm.sympify(e.expr)
+        view = {x: sm.Symbol(f"at.{x}") for x in expr.free_symbols if str(x) in names}
+        events.append({"name": e.name.upper(), "expr": ccode(expr.xreplace({**own, **view}))})
+    fields = [f for f in POINT_FIELDS if f in names]
+    return {"joints": [jm.joint for jm in model.joints], "motion": motion, "friction": friction,
+            "friction_kernel": _kernel(model, [friction]) if friction else None, "events": events,
+            "fields": fields, "constants": [f for f in ("R", "delta_c", "P_c", "inv_delta_c", "theta_c") if f in names],
+            "outputs": [(f"{o}_J{j}", f"joint {j}: {doc}") for j in spec.joints for o, doc in POINT_OUTPUTS],
+            "point_outputs": [o.upper() for o, _ in POINT_OUTPUTS],
+            "point_fields": [o for o, _ in POINT_OUTPUTS],
+            "output_names": {f"{o}_J{j}" for j in spec.joints for o, _ in POINT_OUTPUTS}}
 
 
 def _net(model: ModelExpressions, t) -> dict:
@@ -364,8 +412,9 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
         machine_source=_tidy(env.get_template("machine.c.j2").render(ctx)),
         cdef=_tidy(env.get_template("cdef.h.j2").render(ctx) + "\n" + machine_decls),
         state_names=model.state_names,
-        output_names=tuple(o.name for o in model.outputs),
-        event_names=tuple(e.name for e in model.events),
+        output_names=tuple(name for name, _ in context.outputs),
+        event_names=tuple(e.name for e in model.events) + tuple(
+            f"{e.name}_J{j}" for j in spec.joints for e in model.events),
         param_names=tuple(f.name for f in model.params),
         phases=model.phases,
         structure_hash=context.structure_hash,

@@ -66,6 +66,29 @@ class JacobianExpressions:
 
 
 @dataclass(frozen=True)
+class JointMotion:
+    """Joint `joint` (the end of that link) as a contact point: its height and velocity, and
+    the rows of its velocity Jacobian v = J u with the terms (dJ/dt) u. A force (F_x, F_y) on
+    it enters Kane's equations as J^T (F_x, F_y), as the tip's does."""
+
+    joint: int  # 1 to n - 1
+    motion: tuple[Named, ...]  # y, v_x, v_y, Jx[i], Jy[i], Jdot_u[0] (x), Jdot_u[1] (y)
+
+
+def _joint_motion(chain: ChainEquations, joint: int) -> JointMotion:
+    s = chain.symbols
+    x, y = chain.joint_x[joint - 1], chain.joint_y[joint - 1]
+    v = [sum(r.diff(q) * u for q, u in zip(s.q, s.u)) for r in (x, y)]
+    rows = [Named("y", y, f"height of joint {joint}, m"),
+            Named("v_x", v[0], "its velocity x, m/s"), Named("v_y", v[1], "its velocity y, m/s")]
+    for axis, vel in zip("xy", v):
+        rows += [Named(f"J{axis}[{i}]", vel.diff(u), f"dv_{axis}/du{i + 1}") for i, u in enumerate(s.u)]
+    rows += [Named(f"Jdot_u[{k}]", sum(vel.diff(q) * u for q, u in zip(s.q, s.u)), f"(dJ_{axis}/dt) u")
+             for k, (axis, vel) in enumerate(zip("xy", v))]
+    return JointMotion(joint, tuple(rows))
+
+
+@dataclass(frozen=True)
 class ModelExpressions:
     """Everything the templates print, in sympy form, already pruned to the spec."""
 
@@ -87,6 +110,7 @@ class ModelExpressions:
     impulses: tuple[Named, ...] = ()
     heights: tuple[Named, ...] = ()  # joints 1..n-1, then the tip: height above the surface (floor net)
     rate_gradient: tuple[sm.Expr, ...] = ()  # d(delta_rate)/d(q, u): the tip's normal acceleration
+    joints: tuple[JointMotion, ...] = ()  # the joints that can touch the surface (spec.joints)
 
     @property
     def integrals(self) -> tuple[Named, ...]:
@@ -180,14 +204,15 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     used: set[sm.Symbol] = set(machine_symbols(spec))
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
         used |= sm.sympify(e).free_symbols
-    params = fields(spec.links, spec.friction_law, {str(x) for x in used})
+    params = fields(spec.links, spec.friction_law, {str(x) for x in used}, spec.joints)
 
     forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
     jacobian = _jacobian(chain, forcing, tuple(cases), friction_force, tuple(works + impulses)) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign,
                             _tip_jacobian(chain) if spec.constrained else (), tuple(events),
                             tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain),
-                            tuple(-v_By.diff(x) for x in s.q + s.u))
+                            tuple(-v_By.diff(x) for x in s.q + s.u),
+                            tuple(_joint_motion(chain, j) for j in spec.joints))
 
 
 def _heights(chain: ChainEquations) -> tuple[Named, ...]:

@@ -59,6 +59,7 @@ class ChainEquations:
     kinetic_energy: tuple[sm.Expr, ...]  # T_i per link
     potential_energy: sm.Expr  # V
     joint_y: tuple[sm.Expr, ...] = ()  # y of the joints between the links (1 to n - 1): the floor net
+    joint_x: tuple[sm.Expr, ...] = ()  # and their x: contact at the joints
 
 
 @dataclass(frozen=True)
@@ -135,6 +136,8 @@ def derive_chain(n: int) -> ChainEquations:
         # joint i ends link i: its centre plus half its length along the link
         joint_y=tuple(to_plain((b.masscenter.pos_from(O) + s.L[i] / 2 * b.frame.x).dot(N.y))
                       for i, b in enumerate(bodies[:-1])),
+        joint_x=tuple(to_plain((b.masscenter.pos_from(O) + s.L[i] / 2 * b.frame.x).dot(N.x))
+                      for i, b in enumerate(bodies[:-1])),
     )
 
 
@@ -189,7 +192,8 @@ def closed_form_chain(n: int) -> ChainEquations:
         V.append(s.m[i] * s.g * sm.Add(*(arm[j] * si[j] for j in range(i + 1))))
     return ChainEquations(n=n, symbols=s, mass_matrix=M, forcing=f, tip_position=(x_B, y_B),
                           tip_velocity=(v_Bx, v_By), kinetic_energy=tuple(T), potential_energy=sm.Add(*V),
-                          joint_y=tuple(sm.Add(*(s.L[j] * si[j] for j in range(i + 1))) for i in range(n - 1)))
+                          joint_y=tuple(sm.Add(*(s.L[j] * si[j] for j in range(i + 1))) for i in range(n - 1)),
+                          joint_x=tuple(sm.Add(*(s.L[j] * c[j] for j in range(i + 1))) for i in range(n - 1)))
 
 
 def chain_equations(n: int) -> ChainEquations:

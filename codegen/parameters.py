@@ -12,7 +12,9 @@ Kinds:
   calculatedParameter), with the sympy expressions of codegen/contact.py;
 - "machine": set by the phase machine as the impact goes on (delta_m, delta_r, R_res, ...).
 
-A per-link row (`per_link`) stands for n fields: `L1`, `L2`, ... and `chain.length[1]`, ...
+A per-link row (`per_link`) stands for n fields: `L1`, `L2`, ... and `chain.length[1]`, ...;
+a per-joint row (`per_joint`) for one field per joint that can touch the surface (`R_joint2`,
+`contact.joint_radius[2]`): a model without such joints has none.
 """
 from __future__ import annotations
 
@@ -32,6 +34,7 @@ class Parameter:
     kind: str  # "input" | "derived" | "machine"
     needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "frozen" | "used"
     per_link: bool = False
+    per_joint: bool = False
     read: Callable[[Any], Any] | None = None  # the value from a scene (a per-link row: the tuple of the links')
     low: float = -INF  # physical range of an input, for the C check (fmi2SetReal)
     high: float = INF
@@ -42,10 +45,12 @@ class Parameter:
     def value(self, scene: Any, link: int = 0) -> float:
         """This row's value (for `link`, from 0) in `scene`."""
         assert self.read is not None, f"{self.name} is not set by a scene"
-        return self.read(scene)[link] if self.per_link else self.read(scene)
+        return self.read(scene)[link] if self.per_link or self.per_joint else self.read(scene)
 
-    def names(self, links: int) -> list[tuple[str, str, int]]:
-        """(C name, scene key, link index) of each field the row stands for."""
+    def names(self, links: int, joints: tuple[int, ...] = ()) -> list[tuple[str, str, int]]:
+        """(C name, scene key, link or joint index from 0) of each field the row stands for."""
+        if self.per_joint:
+            return [(f"{self.name}{j}", self.key.format(i=j), j - 1) for j in joints]
         if not self.per_link:
             return [(self.name, self.key, 0)]
         return [(f"{self.name}{i}", self.key.format(i=i), i - 1) for i in range(1, links + 1)]
@@ -91,6 +96,8 @@ PARAMETERS: tuple[Parameter, ...] = (
               read=lambda s: s.surface.nu, **POISSON),
     Parameter("S_y_surface", "surface.yield_strength", "Pa", "yield strength of the surface", "input",
               read=lambda s: s.surface.yield_strength, **POSITIVE),
+    Parameter("R_joint", "contact.joint_radius[{i}]", "m", "radius of joint {i}'s contact (the end of link {i})",
+              "input", per_joint=True, read=lambda s: s.joint_radii, **POSITIVE),
     Parameter("surface_height", "surface.height", "m",
               "height of the undeformed surface (ignored when surface.height_initial is set)", "input",
               read=lambda s: 0.0 if s.surface_height is None else s.surface_height),
@@ -156,11 +163,11 @@ class Field:
         return float(self.row.value(scene, self.link))
 
 
-def fields(links: int, friction_law: str, used: set[str]) -> tuple[Field, ...]:
-    """The parameter struct of a model with `links` links and this friction law, whose
-    expressions (force laws, events, switch laws) read the symbols named in `used`."""
+def fields(links: int, friction_law: str, used: set[str], joints: tuple[int, ...] = ()) -> tuple[Field, ...]:
+    """The parameter struct of a model with `links` links, this friction law and contact at
+    `joints`, whose expressions (force laws, events, switch laws) read the symbols in `used`."""
     return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction_law, used)
-                 for name, key, link in p.names(links))
+                 for name, key, link in p.names(links, joints))
 
 
 def markdown_table() -> str:
@@ -168,7 +175,7 @@ def markdown_table() -> str:
     kinds = {"input": "scene", "derived": "derived", "machine": "machine"}
     rows = ["| C field | scene key / FMU variable | unit | set by | range | what |", "|---|---|---|---|---|---|"]
     for p in PARAMETERS:
-        name = f"{p.name}1..{p.name}n" if p.per_link else p.name
+        name = f"{p.name}1..{p.name}n" if p.per_link else f"{p.name}i" if p.per_joint else p.name
         key = p.key.replace("{i}", "i") if p.key else ""
         when = {"always": "", "friction": " (with friction)", "regularized": " (regularized friction)",
                 "coulomb": "", "frozen": "", "used": ""}[p.needs]

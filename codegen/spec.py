@@ -28,6 +28,9 @@ class ModelSpec:
     friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip) | "frozen"
     jacobian: bool = False  # emit the analytic Jacobian (for BDF)
     sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
+    # the joints (1 to links - 1, the end of that link) that can reach the surface and so get
+    # contact code of their own beside the tip's; the others are pruned (docs/model.md)
+    joints: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if self.links < 1:
@@ -36,6 +39,11 @@ class ModelSpec:
             raise ValueError(f"unknown contact model {self.contact_model!r}")
         if self.friction_law not in FRICTION_KINDS:
             raise ValueError(f"unknown friction law {self.friction_law!r}")
+        if tuple(sorted(set(self.joints))) != tuple(self.joints) or any(
+                not 1 <= j < self.links for j in self.joints):
+            raise ValueError(f"joints must be distinct, increasing, between 1 and {self.links - 1}")
+        if self.joints and self.coulomb:
+            raise ValueError("exact Coulomb friction is built for the tip only")
 
     @property
     def has_friction(self) -> bool:
@@ -63,7 +71,11 @@ class ModelSpec:
     def slug(self) -> str:
         """A short readable name, e.g. 'chain2-three-phase-regularized'."""
         return (f"chain{self.links}-{self.contact_model}-{self.friction_law}"
-                + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else ""))
+                + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else "")
+                + ("-joints" + "-".join(map(str, self.joints)) if self.joints else ""))
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True)
+        facts = asdict(self)
+        if not self.joints:  # a tip-only model keeps the key (and the cache) it had before joints
+            del facts["joints"]
+        return json.dumps(facts, sort_keys=True)

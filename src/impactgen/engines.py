@@ -17,7 +17,7 @@ from .dense import dropped_times_warning
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import Scene, load_scene, with_solver
+from .scene import TOUCH_TOLERANCE, Scene, joint_heights, load_scene, with_solver
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -30,7 +30,32 @@ def model_spec(scene: Scene) -> ModelSpec:
     contact, solver = scene.contact, scene.solver
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
-    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained)
+    joints = reachable_joints(scene)
+    if joints and friction_law == "coulomb":
+        raise SceneError("contact.friction_mode", f"joint{'s' if len(joints) > 1 else ''} "
+                         f"{', '.join(map(str, joints))} can reach the surface, and exact Coulomb friction "
+                         "(stick and slip) is built for the tip only; use friction_mode = \"regularized\" "
+                         "or \"frozen\", or a surface the joints cannot reach")
+    # the analytic Jacobian is the tip's alone: a model with contact at the joints takes CVODE's
+    # difference quotients
+    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic" and not joints, sustained,
+                     joints)
+
+
+def reachable_joints(scene: Scene) -> tuple[int, ...]:
+    """The joints (1 to n - 1) that can touch the surface: those whose distance from the
+    pivot along the chain reaches the surface below it. The others get no contact code."""
+    heights = joint_heights(scene)
+    y_s = heights[-1] if scene.surface_height is None else scene.surface_height
+    depth = -y_s  # of the surface below the pivot
+    slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
+    reach = 0.0
+    joints = []
+    for joint, length in enumerate(scene.chain.length[:-1], start=1):
+        reach += length
+        if reach >= depth - slack:
+            joints.append(joint)
+    return tuple(joints)
 
 
 def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,

@@ -17,14 +17,15 @@ from .scene import Scene
 
 
 @lru_cache(maxsize=64)
-def _readers(ffi, links: int) -> tuple[struct.Struct, tuple[Parameter, ...]]:
+def _readers(ffi, links: int, joints: tuple[int, ...] = ()) -> tuple[struct.Struct, tuple[Parameter, ...]]:
     """The rows of the parameter table that a scene sets in a model's struct (its ffi), in
     the struct's order, and the layout that writes their values into it in one call (a
     field at a time would cost a C crossing each). Made once per model."""
     fields = dict(ffi.typeof("model_params").fields)
-    rows = tuple(p for p in PARAMETERS if p.kind == "input" and p.names(links)[0][0] in fields)
+    rows = tuple(p for p in PARAMETERS if p.kind == "input" and p.names(links, joints)
+                 and p.names(links, joints)[0][0] in fields)
     layout, at = "=", 0
-    for name, _, _ in (named for row in rows for named in row.names(links)):
+    for name, _, _ in (named for row in rows for named in row.names(links, joints)):
         field = fields[name]
         assert field.type.cname == "double", f"the scene input {name} is not a double in model_params"
         assert field.offset >= at, f"model_params does not keep the parameter table's order at {name}"
@@ -33,12 +34,15 @@ def _readers(ffi, links: int) -> tuple[struct.Struct, tuple[Parameter, ...]]:
     return struct.Struct(layout), rows
 
 
-def _inputs(scene: Scene, rows: tuple[Parameter, ...]) -> list[float]:
-    """The values of these rows in `scene`, a per-link row's for every link."""
+def _inputs(scene: Scene, rows: tuple[Parameter, ...], joints: tuple[int, ...]) -> list[float]:
+    """The values of these rows in `scene`, a per-link row's for every link, a per-joint row's
+    for each joint of the model."""
     values: list[float] = []
     for row in rows:
         if row.per_link:
             values.extend(row.read(scene))
+        elif row.per_joint:
+            values.extend(row.read(scene)[j - 1] for j in joints)
         else:
             values.append(row.read(scene))
     return values
@@ -48,8 +52,8 @@ def fill_params(model: CompiledModel, scene: Scene):
     """A new `model_params` for `scene`: its inputs, then the derived constants."""
     ffi = model.ffi
     params = ffi.new("model_params *")  # zeroed: the struct's other fields stay 0 under the layout's pad bytes
-    layout, rows = _readers(ffi, model.spec.links)
-    ffi.memmove(params, layout.pack(*_inputs(scene, rows)), layout.size)
+    layout, rows = _readers(ffi, model.spec.links, model.spec.joints)
+    ffi.memmove(params, layout.pack(*_inputs(scene, rows, model.spec.joints)), layout.size)
     derive(model, params)
     return params
 

@@ -55,9 +55,14 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         return _no_impact_at_start(scene, model, session.y0.copy(), first_row.tolist(),
                                    start == lib.MODEL_START_ALONG, started, tallied)
     in_contact = start == lib.MODEL_START_CONTACT
+    joints_at_start = [model.lib.model_joint_number(k) for k in range(len(model.spec.joints))
+                       if m.joint[k].state != machine.free] if model.spec.joints else []
     ran = session.run(params, solver.t_max if solver.t_end is None else solver.t_end, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
     impacts = _impacts(machine, ran.segments, in_contact)
+    if model.spec.joints:
+        impacts = sorted(impacts + _joint_impacts(machine, ran.joint_records, joints_at_start),
+                         key=lambda impact: impact.t_start)
     status, message = _status(lib, scene, machine, ran, impacts)
 
     trajectory = partial(_trajectory, ran, state0, m.state, session.output_index)
@@ -103,7 +108,7 @@ def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) 
     label, free = machine.slip_label, machine.free
     BEGIN, SLIP, MAX_COMPRESSION, END = machine.acts
     # each record unpacked in Segment's field order (a field read by name costs a descriptor call)
-    for t, sample, state, slip, _, act, next_state, next_slip, delta_max, P_max, delta_r, R_res in segments:
+    for t, sample, state, slip, _, act, next_state, next_slip, delta_max, P_max, delta_r, R_res, _point in segments:
         if act & BEGIN:
             impacts.append(Impact(t, sample))
         if not impacts:  # a flight before the first impact
@@ -118,6 +123,17 @@ def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) 
             impact.switches.append((t, STATES[state], STATES[next_state]))
         if act & END:
             impact.t_end, impact.i_end = t, sample
+    return impacts
+
+
+def _joint_impacts(machine: Machine, records: list[Segment], at_start: list[int]) -> list[Impact]:
+    """The joints' impacts, from the records of their switches (`_impacts` per joint)."""
+    impacts = []
+    for joint in sorted({seg.point for seg in records} | set(at_start)):
+        mine = _impacts(machine, [seg for seg in records if seg.point == joint], joint in at_start)
+        for impact in mine:
+            impact.point = f"joint {joint}"
+        impacts += mine
     return impacts
 
 

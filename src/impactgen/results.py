@@ -74,6 +74,7 @@ class Impact:
     e_P: float = math.nan  # kinetic (Poisson): P_r / P_c
     e_E: float = math.nan  # energetic (Stronge): sqrt(W_r / -W_c)
     friction_share: float = math.nan  # W_friction / (W_normal + W_friction): friction's share of the loss
+    point: str = "tip"  # the contact point: "tip", or "joint k" (the end of link k)
 
     @property
     def duration(self) -> float | None:
@@ -86,7 +87,7 @@ class Impact:
     def to_dict(self) -> dict[str, Any]:
         """One row of the impacts table (JSON and DataFrame)."""
         return {
-            "t_start": self.t_start, "t_end": self.t_end, "duration": self.duration,
+            "point": self.point, "t_start": self.t_start, "t_end": self.t_end, "duration": self.duration,
             "delta_max": self.delta_max, "delta_r": self.delta_r, "P_max": self.P_max,
             "R_res": self.R_res, "T_before": self.T_before, "T_after": self.T_after,
             "W_normal": self.W_normal, "W_friction": self.W_friction, "W_gravity": self.W_gravity,

@@ -106,6 +106,11 @@ class Scene:
     def n(self) -> int:
         return self.chain.links
 
+    @property
+    def joint_radii(self) -> tuple[float, ...]:
+        """The contact radius of each joint (1 to n - 1), m."""
+        return (self.tip_radius,) * (self.n - 1)
+
     def replace(self, overrides: Mapping[str, Any] | None = None, **fields: Any) -> "Scene":
         """A new scene with some values changed, checked like `load_scene`.
 

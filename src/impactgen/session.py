@@ -55,6 +55,7 @@ class Segment(NamedTuple):
     P_max: float
     delta_r: float
     R_res: float
+    point: int  # the contact point of the record: links (the tip), or a joint 1 to links - 1
 
 
 _CODES = {("double", 8): "d", ("int", 4): "i", ("long", 8): "q", ("long", 4): "i"}  # C scalar -> struct code
@@ -120,6 +121,7 @@ class MachineRun(NamedTuple):
     message: str
     t_last: float
     summaries: TallyRecords  # over the whole run, over its first impact (ig_summarize)
+    joint_records: list[Segment]  # the joints' switches, each at the end of the segment it ended
 
 
 class CvodeSession:
@@ -260,8 +262,15 @@ class CvodeSession:
         else:
             t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
+        joint_records: list[Segment] = []
+        if self.model.spec.joints:  # the segments are the tip's; the joints' switches are records beside them
+            tip = self.model.spec.links
+            if segment_params is not None:
+                segment_params = [q for q, seg in zip(segment_params, segments) if seg.point == tip]
+            joint_records = [seg for seg in segments if seg.point != tip]
+            segments = [seg for seg in segments if seg.point == tip]
         return MachineRun._make((t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
-                          self._summarized()))
+                          self._summarized(), joint_records))
 
     def _summarized(self) -> TallyRecords:
         """The run's two summaries, tallied in C now (the session's buffers serve the next

@@ -48,6 +48,38 @@ static int under_floor(ig_solver *s, const model_params *p, double t, const doub
     return 1;
 }
 
+/* The most segment records one switch writes: the tip's, and one per joint that switched. */
+#ifdef MODEL_NJOINT
+#define SWITCH_RECORDS (1 + MODEL_NJOINT)
+#else
+#define SWITCH_RECORDS 1
+#endif
+
+#ifdef MODEL_NJOINT
+/* After a switch recorded in `seg`: a record of its own for each joint that switched there. */
+static int record_joints(const model_machine *m, const ig_segment *seg, ig_segment *segments, int segment_capacity,
+                         int *n_segments)
+{
+    for (int k = 0; k < MODEL_NJOINT; ++k) {
+        const model_joint_machine *j = &m->joint[k];
+        if (!j->act) continue;
+        if (*n_segments >= segment_capacity) return 1;
+        ig_segment *rec = &segments[(*n_segments)++];
+        *rec = *seg;
+        rec->point = model_joint_number(k);
+        rec->state = j->was;
+        rec->slip = rec->next_slip = 0.0;
+        rec->act = j->act;
+        rec->next_state = j->state;
+        rec->delta_max = j->delta_max;
+        rec->P_max = j->P_max;
+        rec->delta_r = j->delta_r;
+        rec->R_res = j->R_res;
+    }
+    return 0;
+}
+
+#endif
 /* ig_run's loop over the segments (solver.h); ig_run then notes its last sample in the
  * tally, whichever way the loop returned. */
 static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
@@ -59,7 +91,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
     double atol_now[MODEL_NSTATE];
     long begun = 0;
     *n_segments = 0;
-    if (capacity < 1 || segment_capacity < 1 || *n_written < 0 || *n_written >= capacity) {
+    if (capacity < 1 || segment_capacity < SWITCH_RECORDS || *n_written < 0 || *n_written >= capacity) {
         ig_solver_say(s, "ig_run: the buffers must have room for a sample and a segment (*n_written: "
                          "the samples already in them, 0 for emptied buffers)");
         return IG_ERR_USAGE;
@@ -77,7 +109,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
             }
         } else {
             if (!s->active) {
-                if (*n_segments >= segment_capacity) return IG_SEGMENTS_FULL;
+                if (*n_segments + SWITCH_RECORDS > segment_capacity) return IG_SEGMENTS_FULL;
                 if (!every_step && *n_written >= capacity) return IG_BUFFER_FULL;
                 if (begun++ >= max_segments) {
                     ig_solver_say(s, "too many phase switches");
@@ -138,7 +170,14 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         seg->P_max = m->P_max;
         seg->delta_r = m->delta_r;
         seg->R_res = m->R_res;
+        seg->point = MODEL_NQ;
         if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
+#ifdef MODEL_NJOINT
+        if (flag == IG_ROOT && record_joints(m, seg, segments, segment_capacity, n_segments) != 0) {
+            ig_solver_say(s, "ig_run: no room for the joints' switch records (segment_capacity)");
+            return IG_ERR_USAGE;
+        }
+#endif
         if (flag == IG_REACHED_END) return IG_REACHED_END;
         const int act = seg->act;
         if (act & MODEL_ACT_END) return IG_RUN_DONE;

@@ -94,6 +94,7 @@ static void fold_impact(ig_tally *a, double contact, int first_folded)
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
                           const double *out_buf)
 {
+    if (seg->point != MODEL_NQ) return;  /* a joint's switch: the summaries are the tip's */
     const long k = seg->sample;
     const double *y = y_buf + (size_t)k * MODEL_NSTATE, *out = out_buf + (size_t)k * MODEL_NOUT;
     if (seg->state == MODEL_MACHINE_SUSTAINED && isnan(a->t_sustained)) a->t_sustained = a->segment_start;

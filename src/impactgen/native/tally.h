@@ -22,6 +22,9 @@ typedef struct {
     int next_state;      /* the machine state after the switch */
     double next_slip;
     double delta_max, P_max, delta_r, R_res;  /* the machine's impact record after the switch */
+    int point;           /* the contact point the record is of: MODEL_NQ the tip, 1 to MODEL_NQ - 1 a
+                            joint (a joint's switch is a record of its own, at the end of the
+                            segment it ended: state, act, next_state and the impact record its) */
     model_params params; /* the parameters during the segment */
 } ig_segment;
 
