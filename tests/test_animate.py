@@ -133,20 +133,22 @@ def test_the_default_file_is_named_after_the_scene():
     assert str(default_path("..")) == "animation.gif"
 
 
-def test_a_joint_below_the_surface_is_drawn_in_the_warning_colour(tmp_path):
-    """Only the tip has a contact law: a joint that swings through the surface is drawn red,
-    in the frames where it is under it (and in no other)."""
+def test_a_joint_on_the_surface_is_drawn_in_its_contact_phase(tmp_path):
+    """A joint that swings onto the surface has its own contact: in the frames of its impacts it
+    is drawn in the colour of its phase, and no point is drawn in the warning colour."""
     import impactgen
-    from impactgen.animate import angles_at, animate, frame_times, point_positions, surface_height
+    from impactgen.animate import animate, frame_times, point_phases
     scene = impactgen.load_scene(PAPER, {"initial.q_deg": [-10, -45], "initial.u": [-3, 0], "solver.t_end": 0.5})
     result = impactgen.simulate(scene, dense_output=True)
+    joint_impacts = [i for i in result.impacts if i.point == "joint 1"]
+    assert joint_impacts
+    first = joint_impacts[0]
+    middle = np.array([(first.t_start + first.t_end) / 2])
+    assert point_phases(result, middle)[0, 0] in ("elastic", "elastoplastic", "restitution", "reloading")
     frames = 12
-    times = frame_times(result, frames)
-    _, y = point_positions(scene.chain.length, angles_at(result, times))
-    under = y[1] < surface_height(result) - 1e-3
-    assert 0 < under.sum() < frames
-    path = animate(result, tmp_path / "through.gif", fps=frames, seconds=1.0, dpi=40)
-    for frame, below in zip(_frames(path), under):
+    assert frame_times(result, frames).size == frames
+    path = animate(result, tmp_path / "onto.gif", fps=frames, seconds=1.0, dpi=40)
+    for frame in _frames(path):
         left = np.asarray(frame.crop((0, 0, frame.width // 2, frame.height))).astype(int)
         red = (left[..., 0] > 120) & (left[..., 0] > 2.5 * left[..., 1]) & (left[..., 0] > 2.5 * left[..., 2])
-        assert red.any() == below
+        assert not red.any()

@@ -302,6 +302,7 @@ int model_derive(model_params *p, const char **range_text)
     p->theta_c = theta_c;
     (void)S_y;
     (void)nu;
+
     return MODEL_PARAMS_OK;
 }
 
@@ -377,6 +378,33 @@ static int pulled_in(const model_params *p, double t, const double *y, const dou
     return model_delta_acceleration(y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
 }
 
+/* The state scales of an impact at a point of contact radius R approaching at v_n with speed
+ * (v_x, v_y): a Hertz estimate of its penetration
+ * delta_est = (15 m_eff v_n^2 / (16 E* R^1/2))^(2/5), with the effective mass
+ * m_eff ~ 2 T / |v|^2, over the chain's length for the angles (the penetration is a
+ * difference of heights); the speeds and the works at contact. */
+static void impact_scales(const model_params *p, double R, double v_x, double v_y, double v_n, double T,
+                          const double *y, double *scale)
+{
+    const double v2 = v_x * v_x + v_y * v_y;
+    const double m_total = chain_mass(p);
+    const double m_eff = v2 > 0.0 ? fmin(2.0 * T / v2, m_total) : m_total;
+    double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(R)), 0.4);
+    double speed = 0.0, energy = T;
+    for (int i = 0; i < 3; ++i) speed = fmax(speed, fabs(y[3 + i]));
+    if (!(delta_est > 0.0)) {  /* a resting or grazing start: the scales of settling under the chain's weight */
+        delta_est = pow(3.0 * m_total * p->g / (4.0 * p->E_star * sqrt(R)), 2.0 / 3.0);
+        speed = fmax(speed, sqrt(2.0 * p->g * delta_est) / chain_length(p));
+        energy = fmax(energy, m_total * p->g * delta_est);
+    }
+    for (int i = 0; i < 3; ++i) {
+        scale[i] = MODEL_ANGLE_RESOLUTION * delta_est / chain_length(p);
+        scale[3 + i] = speed;
+    }
+    /* the works (the impulses after them are left out of the error test: machine_atol) */
+    for (int i = 6; i < MODEL_NSTATE; ++i) scale[i] = energy;
+}
+
 /* A new impact at (t, y), whose outputs under the force law so far are `out`. */
 static void impact_begins(model_machine *m, model_params *p, double t, const double *y,
                           const double *out)
@@ -391,30 +419,8 @@ static void impact_begins(model_machine *m, model_params *p, double t, const dou
     p->delta_m = 0.0;
     p->delta_r = 0.0;
     p->R_res = p->R;
-    /* The impact's scales: a Hertz estimate of its penetration
-     * delta_est = (15 m_eff v_n^2 / (16 E* R^1/2))^(2/5), with the approach speed v_n and the
-     * effective mass m_eff ~ 2 T / |v_B|^2, over the chain's length for the angles (the
-     * penetration is a difference of tip heights); the speeds and the works at contact. */
     const double v_Bx = out[MODEL_OUT_v_Bx], v_By = out[MODEL_OUT_v_By];
-    const double T = out[MODEL_OUT_T];
-    const double v_tip2 = v_Bx * v_Bx + v_By * v_By;
-    const double m_total = chain_mass(p);
-    const double m_eff = v_tip2 > 0.0 ? fmin(2.0 * T / v_tip2, m_total) : m_total;
-    const double v_n = fmax(out[MODEL_OUT_delta_rate], 0.0);
-    double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(p->R)), 0.4);
-    double speed = 0.0, energy = T;
-    for (int i = 0; i < 3; ++i) speed = fmax(speed, fabs(y[3 + i]));
-    if (!(delta_est > 0.0)) {  /* a resting or grazing start: the scales of settling under the chain's weight */
-        delta_est = pow(3.0 * m_total * p->g / (4.0 * p->E_star * sqrt(p->R)), 2.0 / 3.0);
-        speed = fmax(speed, sqrt(2.0 * p->g * delta_est) / chain_length(p));
-        energy = fmax(energy, m_total * p->g * delta_est);
-    }
-    for (int i = 0; i < 3; ++i) {
-        m->scale[i] = MODEL_ANGLE_RESOLUTION * delta_est / chain_length(p);
-        m->scale[3 + i] = speed;
-    }
-    /* the works (the impulses after them are left out of the error test: machine_atol) */
-    for (int i = 6; i < MODEL_NSTATE; ++i) m->scale[i] = energy;
+    impact_scales(p, p->R, v_Bx, v_By, fmax(out[MODEL_OUT_delta_rate], 0.0), out[MODEL_OUT_T], y, m->scale);
 }
 
 int model_machine_start(model_machine *m, model_params *p, double t, const double *y,
@@ -457,11 +463,13 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     return MODEL_START_FREE;
 }
 
-int model_machine_events(const model_machine *m, int *events, int *directions)
+#define WATCH(e, d) (events[k] = (e), directions[k] = (d), ++k)
+/* The contact events a point watches in machine state `state`, from events[0], as the tip's
+ * event indices plus `base` (0 for the tip; a joint's first event). Returns how many. */
+static int watch_state(int state, int base, int *events, int *directions)
 {
     int k = 0;
-#define WATCH(e, d) (events[k] = (e), directions[k] = (d), ++k)
-    switch (m->state) {
+    switch (state) {
     case MODEL_MACHINE_FREE:
         WATCH(MODEL_EVENT_CONTACT, RISING);
         break;
@@ -483,9 +491,16 @@ int model_machine_events(const model_machine *m, int *events, int *directions)
     default:
         break;
     }
-#undef WATCH
+    for (int e = 0; e < k; ++e) events[e] += base;
     return k;
 }
+
+int model_machine_events(const model_machine *m, int *events, int *directions)
+{
+    int k = watch_state(m->state, 0, events, directions);
+    return k;
+}
+#undef WATCH
 
 /* The machine state after `state` when the contact events in `has` fired. */
 static int next_state(int state, const int *has, const model_params *p)
@@ -507,13 +522,16 @@ static int next_state(int state, const int *has, const model_params *p)
     }
 }
 
+static int tip_switch(model_machine *m, model_params *p, double t, const double *y, const int *has,
+                      int contact_fired, int slip_fired);
+
 int model_machine_switch(model_machine *m, model_params *p, double t, const double *y,
                          const int *fired)
 {
     int events[MODEL_NEVENT], directions[MODEL_NEVENT];
     int has[MODEL_NEVENT] = {0};
     const int watched = model_machine_events(m, events, directions);
-    int contact_fired = 0, slip_fired = 0;
+    int contact_fired = 0, slip_fired = 0, act = 0;
     m->stick_excess = -INFINITY;  /* a new segment follows */
     m->stick_F = 0.0;
     for (int k = 0; k < watched; ++k) {
@@ -521,8 +539,16 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
         has[events[k]] = 1;
         ++contact_fired;
     }
+    if (contact_fired + slip_fired == 0) return act;  /* nothing of the tip's fired */
+    return act | tip_switch(m, p, t, y, has, contact_fired, slip_fired);
+}
+
+/* The tip's switch, when its events in `has` fired. */
+static int tip_switch(model_machine *m, model_params *p, double t, const double *y, const int *has,
+                      int contact_fired, int slip_fired)
+{
+    (void)contact_fired;
     (void)slip_fired;
-    if (contact_fired + slip_fired == 0) return 0;  /* nothing watched fired: carry on */
     double out[MODEL_NOUT];  /* under the force law that has been acting */
     model_outputs(t, y, out, p);
     const int state = m->state;

@@ -12,12 +12,14 @@ height above the surface in micrometres (on a scale that is linear within the de
 penetration and logarithmic beyond it, so a flight's centimetres fit as well), against the
 same warped time.
 
-The contact points are every joint and the tip. Only the tip has a contact law today:
-`point_phases` gives the joints the phase "free", and a free point below the surface is
-drawn in a warning colour. A result with a phase per point fills that one function.
+The contact points are every joint and the tip, each drawn in the colour of its phase
+(`point_phases`: the tip's from the run's phase spans, a joint's from its impacts). A joint
+that cannot reach the surface has no contact law; should a point be found below the surface
+while free, it is drawn in a warning colour.
 """
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -99,15 +101,23 @@ def point_positions(lengths: tuple[float, ...], q: np.ndarray) -> tuple[np.ndarr
 
 def point_phases(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     """The phase of every contact point at `times`: shape (n, len(times)), joints 1 to n-1,
-    then the tip. Only the tip has a contact law today: its row is read from the result's
-    phase spans; the joints are "free". A result with a phase per point fills every row here.
-    """
+    then the tip. The tip's row is read from the result's phase spans; a joint's from its
+    impacts (each begins elastic and goes through its switches to its end); a joint without
+    impacts is "free" throughout."""
     phases = np.full((result.n, len(times)), "free", dtype=object)
     spans = result.phases
     if spans:
         starts = np.array([s.t0 for s in spans])
         k = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(spans) - 1)
         phases[-1] = [spans[i].phase for i in k]
+    for impact in result.impacts:
+        if impact.point == "tip":
+            continue
+        row = phases[int(impact.point.split()[-1]) - 1]
+        end = math.inf if impact.t_end is None else impact.t_end
+        changes = [(impact.t_start, "elastic")] + [(t, to) for t, _, to in impact.switches]
+        for (t0, phase), (t1, _) in zip(changes, changes[1:] + [(end, "")]):
+            row[(times >= t0) & (times < t1)] = phase
     return phases
 
 

@@ -50,9 +50,12 @@ def write_run(result: SimulationResult, out: Path, fmt: str | None = None) -> li
     except OSError as exc:
         raise SceneError("--out", f"cannot create the folder {out}: {exc}") from None
     trajectory = trajectory_columns(result)
-    impacts = {k: (np.array([getattr(i, k) if getattr(i, k) is not None else np.nan
-                             for i in result.impacts], dtype=float), unit)
-               for k, unit in IMPACT_UNITS.items() if k != "duration"}
+    # the point as a number: k for joint k, n for the tip (the floor net's numbering)
+    impacts = {"point": (np.array([result.n if i.point == "tip" else int(i.point.split()[-1])
+                                   for i in result.impacts], dtype=np.int64), "")}
+    impacts.update({k: (np.array([getattr(i, k) if getattr(i, k) is not None else np.nan
+                                  for i in result.impacts], dtype=float), unit)
+                    for k, unit in IMPACT_UNITS.items() if k not in ("duration", "point")})
     impacts["duration"] = (np.array([i.duration if i.duration is not None else np.nan
                                      for i in result.impacts], dtype=float), "s")
     paths = [out / f"trajectory.{fmt}", out / f"impacts.{fmt}", out / "summary.json"]

@@ -116,7 +116,7 @@ class Ready(Generic[Part]):
 COEFFICIENT_UNITS = {"v_n0": "m/s", "P_c": "N s", "P_r": "N s", "P_t": "N s", "e_N": "1", "e_P": "1", "e_E": "1",
                      "friction_share": "1"}
 COEFFICIENTS = tuple(COEFFICIENT_UNITS)
-IMPACT_UNITS = {"t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
+IMPACT_UNITS = {"point": "", "t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
                 "P_max": "N", "R_res": "m", "T_before": "J", "T_after": "J", "W_normal": "J",
                 "W_friction": "J", "W_gravity": "J", **COEFFICIENT_UNITS}
 
@@ -490,7 +490,7 @@ class SimulationResult:
         Returns
         -------
         pandas.DataFrame
-            Columns t_start, t_end, duration, delta_max, delta_r, P_max, R_res, T_before,
+            Columns point ("tip" or "joint k"), t_start, t_end, duration, delta_max, delta_r, P_max, R_res, T_before,
             T_after, W_normal, W_friction, W_gravity, switches (the phase switches as
             "from>to@t" joined by ";") and stick_slip.
         """

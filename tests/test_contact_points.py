@@ -1,0 +1,86 @@
+"""Contact at the joints in the generated C (issue 38): every joint that can reach the surface
+has the tip's contact laws on a state of its own; the others are pruned from the model."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactgen
+from impactgen.codegen.spec import ModelSpec
+from impactgen.engines import model_spec, reachable_joints
+
+# The issue's 3-link chain: the tip starts on the surface, joint 2 lands near t = 0.126 s.
+THREE_LINKS = {"chain.links": 3, "chain.length": [1, 1, 0.2], "chain.mass": [1, 1, 0.2],
+               "initial.q_deg": [-30, -80, -20], "initial.u": [0, 0, -3], "solver.t_end": 2}
+# Released at rest with joint 2 1.5 cm above the surface: it lands first and comes to rest on it.
+JOINT_LANDS = {"chain.links": 3, "chain.length": [1, 1, 0.2], "initial.q_deg": [-30, -80, 60],
+               "initial.u": [0, 0, 0], "surface.height": -1.5, "solver.t_end": 1}
+CONTACT_DEPTH = 1e-3  # m: far deeper than any of these impacts dents (0.2 mm at most)
+
+
+def _budget_closes(result) -> bool:
+    energy = result.summary["energy"]
+    scale = max(abs(energy["W_normal"]), abs(energy["W_gravity"]), result.summary["T0"])
+    return abs(energy["residual"]) < 1e-6 * scale
+
+
+def _points(result) -> set[str]:
+    return {impact.point for impact in result.impacts}
+
+
+def test_only_the_joints_that_can_reach_the_surface_get_contact_code():
+    paper = impactgen.load_scene("paper")
+    assert reachable_joints(paper) == () and model_spec(paper).joints == ()
+    assert model_spec(impactgen.load_scene("paper", THREE_LINKS)).joints == (2,)
+    # a change of numbers that lets a joint reach the surface gets the model that has it
+    higher = paper.replace({"initial.q_deg": [-10, -45]})  # the surface at the tip, now 0.88 m below the pivot
+    assert model_spec(higher).joints == (1,)
+    assert model_spec(higher).slug.endswith("-joints1")
+    assert ModelSpec(2).to_json() == ModelSpec(2, joints=()).to_json()  # a tip-only model keeps its key
+
+
+def test_the_issues_three_link_chain_lands_on_joint_2_and_stays_above_the_floor():
+    result = impactgen.simulate(impactgen.load_scene("paper", THREE_LINKS))
+    assert result.status == "ok", result.message
+    assert _points(result) == {"tip", "joint 2"}
+    joint = [impact for impact in result.impacts if impact.point == "joint 2"]
+    assert 0.12 < joint[0].t_start < 0.13 and joint[0].delta_max > 0
+    outputs = result.trajectory.outputs
+    assert 0 < np.max(outputs["delta_J2"]) < CONTACT_DEPTH
+    assert np.max(outputs["delta_J2"]) == pytest.approx(max(i.delta_max for i in joint), rel=1e-6)
+    assert np.max(outputs["delta"]) < CONTACT_DEPTH
+    assert _budget_closes(result)
+    assert result.summary["impacts"] == sum(i.point == "tip" for i in result.impacts)  # the summary is the tip's
+
+
+def test_a_joint_that_lands_first_comes_to_rest_on_the_surface():
+    result = impactgen.simulate(impactgen.load_scene("paper", JOINT_LANDS))
+    assert result.status == "ok", result.message
+    first = result.impacts[0]
+    assert first.point == "joint 2" and 0.05 < first.t_start < 0.065
+    last = [impact for impact in result.impacts if impact.point == "joint 2"][-1]
+    assert last.t_end is None and last.switches[-1][2] == "sustained"  # chattering ends held on the surface
+    F = result.trajectory.outputs["F_J2"]
+    assert F[-1] > 0 and np.max(result.trajectory.outputs["delta_J2"]) < CONTACT_DEPTH
+    assert _budget_closes(result)
+
+
+def test_two_points_hitting_at_once_both_begin_contact():
+    """Joint 1 and the tip start on the surface, both moving into it at the same speed."""
+    scene = impactgen.load_scene("paper", {"initial.q_deg": [-30, 0], "initial.u": [-1, 0],
+                                           "surface.height": "initial", "solver.t_end": 0.01})
+    result = impactgen.simulate(scene)
+    assert result.status == "ok", result.message
+    starts = {impact.point: impact.t_start for impact in result.impacts[:2]}
+    assert starts == {"tip": 0.0, "joint 1": 0.0}
+    outputs = result.trajectory.outputs
+    assert outputs["delta_rate"][0] == pytest.approx(outputs["delta_rate_J1"][0])  # the same normal speed
+    assert all(impact.t_end is not None for impact in result.impacts[:2])  # both rebound
+    assert _budget_closes(result)
+
+
+def test_each_impact_names_its_point_in_the_tables():
+    result = impactgen.simulate(impactgen.load_scene("paper", dict(THREE_LINKS, **{"solver.t_end": 0.3})))
+    rows = [impact.to_dict() for impact in result.impacts]
+    assert [row["point"] for row in rows[:3]] == ["tip", "tip", "joint 2"]
+    assert set(result.impacts_frame()["point"]) == {"tip", "joint 2"}
