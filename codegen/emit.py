@@ -333,7 +333,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
 # machine's (phase aside) and the constants its own radius gives (`<prefix>_derive`).
 POINT_OUTPUTS = (("delta", "penetration, m"), ("delta_rate", "d(delta)/dt, m/s"), ("v_x", "velocity x, m/s"),
                  ("v_y", "velocity y, m/s"), ("F", "normal contact force, N"), ("F_f", "friction force along x, N"))
-POINT_FIELDS = ("y_s", "R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res", "s_frozen")
+POINT_FIELDS = ("y_s", "R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res", "slip",
+                "s_frozen")
 
 
 def _joints(model: ModelExpressions, t) -> dict:

@@ -42,8 +42,6 @@ class ModelSpec:
         if tuple(sorted(set(self.joints))) != tuple(self.joints) or any(
                 not 1 <= j < self.links for j in self.joints):
             raise ValueError(f"joints must be distinct, increasing, between 1 and {self.links - 1}")
-        if self.joints and self.coulomb:
-            raise ValueError("exact Coulomb friction is built for the tip only")
 
     @property
     def has_friction(self) -> bool:

@@ -38,6 +38,10 @@ THRESHOLDS = (
     Threshold("FLOOR_DEPTH", 1e-2,
               "a joint or the tip found deeper than this fraction of the chain's shortest link "
               "below the surface, after any step, ends the run as failed (the floor net)"),
+    Threshold("HOLD_REGULARIZATION", 1e-12,
+              "the constraint forces of several held points (stuck, resting) are solved with this "
+              "fraction of the largest diagonal entry added to the diagonal: dependent rows (both ends "
+              "of a link lying flat, stuck) then share the force instead of making the system singular"),
     Threshold("ANGLE_ATOL_FLOOR", 1e-15,
               "absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m"),
     Threshold("QUADRATURE_ATOL", 1e300,

@@ -84,3 +84,21 @@ def test_each_impact_names_its_point_in_the_tables():
     rows = [impact.to_dict() for impact in result.impacts]
     assert [row["point"] for row in rows[:3]] == ["tip", "tip", "joint 2"]
     assert set(result.impacts_frame()["point"]) == {"tip", "joint 2"}
+
+
+@pytest.mark.parametrize("mu", [0.5])
+def test_exact_coulomb_friction_sticks_and_slips_at_the_joints_too(mu):
+    """A joint comes to rest on the surface stuck and slipping by the tip's rules; where the
+    last link lies flat, its two ends share the holding force and neither is left stuck
+    beyond mu F (the run would fail naming the missed slip)."""
+    scene = impactgen.load_scene("paper", dict(JOINT_LANDS, **{"contact.friction_mode": "coulomb",
+                                                                "contact.friction": mu}))
+    result = impactgen.simulate(scene)
+    assert result.status == "ok", result.message
+    joint = [impact for impact in result.impacts if impact.point == "joint 2"]
+    labels = {to for impact in joint for _, _, to in impact.stick_slip}
+    assert "stick" in labels and labels & {"slip+", "slip-"}
+    outputs = result.trajectory.outputs
+    held = outputs["F_J2"] > 0
+    assert np.all(np.abs(outputs["F_f_J2"][held]) <= mu * outputs["F_J2"][held] * (1 + 1e-6) + 1e-9)
+    assert _budget_closes(result)

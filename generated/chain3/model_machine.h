@@ -44,6 +44,7 @@ extern "C" {
 #define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (judged at the end of each segment from every step: the machine's observer) */
 #define MODEL_YIELD_ONSET 1.9  /* the Hertz law (phase I) holds up to this many critical deformations delta_c; the Jackson-Green law (phase II, Eq. 10) beyond */
 #define MODEL_FLOOR_DEPTH 0.01  /* a joint or the tip found deeper than this fraction of the chain's shortest link below the surface, after any step, ends the run as failed (the floor net) */
+#define MODEL_HOLD_REGULARIZATION 1e-12  /* the constraint forces of several held points (stuck, resting) are solved with this fraction of the largest diagonal entry added to the diagonal: dependent rows (both ends of a link lying flat, stuck) then share the force instead of making the system singular */
 #define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
 #define MODEL_QUADRATURE_ATOL 1e+300  /* absolute tolerance of the impulses, N s: they are quadratures of the contact forces that feed nothing back, so, as CVODES leaves quadratures out of its error test by default, they do not set the step (finite: CVODE's error weights must be positive) */
 

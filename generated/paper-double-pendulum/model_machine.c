@@ -454,6 +454,10 @@ static int watch_state(int state, int base, int *events, int *directions)
     switch (state) {
     case MODEL_MACHINE_FREE:
         WATCH(MODEL_EVENT_CONTACT, RISING);
+        /* a point that separated inside its dent (delta = delta_r > 0) and comes back down
+         * before it has left the surface never sees delta rise through 0: its return to
+         * delta_r is the new impact (MODEL section 4: a later contact is a new impact) */
+        WATCH(MODEL_EVENT_SEPARATION, RISING);
         break;
     case MODEL_MACHINE_ELASTIC:
         WATCH(MODEL_EVENT_MAX_COMPRESSION, FALLING);
@@ -521,8 +525,8 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
         has[events[k]] = 1;
         ++contact_fired;
     }
-    if (contact_fired + slip_fired == 0) return act;  /* nothing of the tip's fired */
-    return act | tip_switch(m, p, t, y, has, contact_fired, slip_fired);
+    if (contact_fired + slip_fired != 0) act |= tip_switch(m, p, t, y, has, contact_fired, slip_fired);
+    return act;
 }
 
 /* The tip's switch, when its events in `has` fired. */

@@ -596,9 +596,10 @@ IMPACT_ROWS_SHOWN = (5, 3)  # the per-impact table shows the first and the last 
 def _phase_line(result) -> str:
     """The first impact's phases, times from its start in microseconds (a contact lasts
     about 0.5 ms: absolute times in 4 figures would hide it)."""
-    if not result.impacts:
+    tips = [impact for impact in result.impacts if impact.point == "tip"]
+    if not tips:
         return "phases: " + ", ".join(f"{p.phase} [{p.t0:.9g}, {p.t1:.9g}] s" for p in result.phases[:12])
-    impact = result.impacts[0]
+    impact = tips[0]
     end = impact.t_end if impact.t_end is not None else math.inf
     spans = [p for p in result.phases if p.phase != "free" and impact.t_start <= p.t0 <= end][:12]
     us = 1e6

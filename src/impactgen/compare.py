@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import ImpactgenError, SceneError, SolverError
 from .impact_laws import LAWS, RigidChain, solve_impact
-from .results import SimulationResult
+from .results import SimulationResult, tip_impacts
 from .scene import Scene
 
 LAW_COEFFICIENT = {"newton": "e_N", "poisson": "e_P", "energetic": "e_E"}  # the coefficient each law takes
@@ -25,11 +25,12 @@ GAIN_TOLERANCE = 1e-12  # an energy change above this fraction of T_before count
 
 def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
     """The rows of the comparison for the first impact of a compliant run (see `compare_laws`)."""
-    if not result.impacts or result.impacts[0].i_end is None:
+    tips = tip_impacts(result.impacts)
+    if not tips or tips[0].i_end is None:
         raise SceneError("initial", "the run has no finished impact to compare the rigid laws with"
                          + (f": {result.message}" if result.message else ""))
     scene, n = result.scene, result.n
-    impact = result.impacts[0]
+    impact = tips[0]
     y = result.trajectory.y
     q0, u0 = y[impact.i_start, :n], y[impact.i_start, n:2 * n]
     u_compliant = y[impact.i_end, n:2 * n]

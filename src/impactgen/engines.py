@@ -31,11 +31,6 @@ def model_spec(scene: Scene) -> ModelSpec:
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
     joints = reachable_joints(scene)
-    if joints and friction_law == "coulomb":
-        raise SceneError("contact.friction_mode", f"joint{'s' if len(joints) > 1 else ''} "
-                         f"{', '.join(map(str, joints))} can reach the surface, and exact Coulomb friction "
-                         "(stick and slip) is built for the tip only; use friction_mode = \"regularized\" "
-                         "or \"frozen\", or a surface the joints cannot reach")
     # the analytic Jacobian is the tip's alone: a model with contact at the joints takes CVODE's
     # difference quotients
     return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic" and not joints, sustained,

@@ -96,6 +96,12 @@ class Impact:
         }
 
 
+def tip_impacts(impacts: list[Impact]) -> list[Impact]:
+    """The tip's impacts: what a run's summaries and the impact laws are made of (the joints'
+    impacts are listed beside them, each naming its point)."""
+    return [impact for impact in impacts if impact.point == "tip"]
+
+
 def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
     """(t, from, to) switches as the summaries and the impacts table write them."""
     return [{"t": t, "from": a, "to": b} for t, a, b in items]
@@ -558,7 +564,8 @@ def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> 
 def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
     """The first impact as MODEL section 6 lists it, with its energy budget (the whole run
     when there was no impact). An impact the run ended in has t_contact 0."""
-    impact = result.impacts[0] if result.impacts else None
+    tips = tip_impacts(result.impacts)
+    impact = tips[0] if tips else None
     i0 = impact.i_start if impact else 0
     i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
     budget = None  # the impact's energies were read from the same two samples when the result was made
@@ -573,7 +580,7 @@ def _run_summary(result: SimulationResult) -> dict[str, Any]:
     budget over every impact and flight. Every impact starts from the undeformed surface in
     this model, so the deepest dent is the largest delta_r (not a sum); t_contact is the
     total time in contact, an impact the run ends in counted to the end."""
-    return _summary(result, 0, len(result.trajectory.t) - 1, result.impacts, count_open=True)
+    return _summary(result, 0, len(result.trajectory.t) - 1, tip_impacts(result.impacts), count_open=True)
 
 
 def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
@@ -593,7 +600,7 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
         max([i.P_max for i in impacts], default=0.0), deepest.R_res if deepest else 0.0, float(contact),
         first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
         *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
-        len(first.stick_slip) if first else 0, len(result.impacts),
+        len(first.stick_slip) if first else 0, len(tip_impacts(result.impacts)),
         *(getattr(first, name) if first else math.nan for name in COEFFICIENTS), tuple(traj.y[i1].tolist()))
     return _from_tally(tallied, n, impacts)
 
@@ -609,7 +616,7 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     `_summary` computes them from the samples); the lists of the first impact's switches
     from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
     lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
-    first = impacts[0] if impacts else None
+    first = next((impact for impact in impacts if impact.point == "tip"), None)  # the tally is the tip's
     (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
      W_normal, W_friction, W_gravity, residual, _, _, count, *coefficients, y) = s  # Tallied's fields
     return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,

@@ -68,7 +68,8 @@ static int record_joints(const model_machine *m, const ig_segment *seg, ig_segme
         *rec = *seg;
         rec->point = model_joint_number(k);
         rec->state = j->was;
-        rec->slip = rec->next_slip = 0.0;
+        rec->slip = j->was_slip;
+        rec->next_slip = j->slip;
         rec->act = j->act;
         rec->next_state = j->state;
         rec->delta_max = j->delta_max;
