@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ImpactgenError, SceneError
-from .results import IMPACT_UNITS, OUTPUT_UNITS, SimulationResult
+from .results import IMPACT_UNITS, OUTPUT_UNITS, SimulationResult, point_number
 
 FORMATS = ("parquet", "csv")
 
@@ -51,8 +51,7 @@ def write_run(result: SimulationResult, out: Path, fmt: str | None = None) -> li
         raise SceneError("--out", f"cannot create the folder {out}: {exc}") from None
     trajectory = trajectory_columns(result)
     # the point as a number: k for joint k, n for the tip (the floor net's numbering)
-    impacts = {"point": (np.array([result.n if i.point == "tip" else int(i.point.split()[-1])
-                                   for i in result.impacts], dtype=np.int64), "")}
+    impacts = {"point": (np.array([point_number(i.point, result.n) for i in result.impacts], dtype=np.int64), "")}
     impacts.update({k: (np.array([getattr(i, k) if getattr(i, k) is not None else np.nan
                                   for i in result.impacts], dtype=float), unit)
                     for k, unit in IMPACT_UNITS.items() if k not in ("duration", "point")})

@@ -29,6 +29,8 @@ def _pyplot():
     return plt
 
 
+# The lines marking each point's impacts in the whole-run view (the tip's last), colour-blind safe.
+POINT_COLOURS = ("#4477aa", "#228833", "#ccbb44", "#66ccee", "#aa3377", "#bbbbbb", "#000000", "#ee6677")
 WINDOW_MARGIN = 0.05  # of an impact's duration, shown before and after it
 
 
@@ -176,9 +178,11 @@ def _plot_whole_run(plt, result: SimulationResult, out_dir: Path) -> list[Path]:
     axes[2].set_ylabel("mm")
     axes[2].set_xlabel("t (s)")
     starts = [i.t_start for i in result.impacts]
+    points = sorted({i.point for i in result.impacts}, key=lambda p: (p == "tip", p))
+    colours = dict(zip(points, POINT_COLOURS)) if len(points) > 1 else {"tip": "#ee6677"}
     for ax in axes:
-        for ts in starts:
-            ax.axvline(ts, color="#ee6677", lw=0.4, alpha=0.5)
+        for impact in result.impacts:
+            ax.axvline(impact.t_start, color=colours.get(impact.point, "#ee6677"), lw=0.4, alpha=0.5)
         for span in result.phases:
             if span.phase == "sustained":
                 ax.axvspan(span.t0, span.t1, color=PHASE_COLOURS["sustained"], alpha=0.6, lw=0)
@@ -186,7 +190,14 @@ def _plot_whole_run(plt, result: SimulationResult, out_dir: Path) -> list[Path]:
         ax.legend(loc="upper right", fontsize=8)
     sustained = f", sustained contact from {result.summary['t_sustained']:.4g} s" \
         if result.summary["t_sustained"] is not None else ""
-    axes[0].set_title(f"{result.scene.name}: {len(starts)} impacts (red lines){sustained}")
+    if len(points) > 1:  # a line per impact, coloured by its point
+        for point in points:
+            axes[0].plot([], [], color=colours[point], lw=1.5, label=f"impacts: {point}")
+        axes[0].legend(loc="upper right", fontsize=8)
+        axes[0].set_title(f"{result.scene.name}: {len(starts)} impacts at {len(points)} points "
+                          f"(lines coloured by point){sustained}")
+    else:
+        axes[0].set_title(f"{result.scene.name}: {len(starts)} impacts (red lines){sustained}")
     _save(plt, fig, out_dir / "run_overview.png", paths)
     _energy_bars(plt, result, out_dir, _budget_between(result, 0, len(t) - 1), "whole run", paths)
     return paths

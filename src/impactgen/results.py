@@ -102,6 +102,11 @@ def tip_impacts(impacts: list[Impact]) -> list[Impact]:
     return [impact for impact in impacts if impact.point == "tip"]
 
 
+def point_number(point: str, n: int) -> int:
+    """A point's number as the C engine records it: k for "joint k", n for "tip"."""
+    return n if point == "tip" else int(point.split()[-1])
+
+
 def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
     """(t, from, to) switches as the summaries and the impacts table write them."""
     return [{"t": t, "from": a, "to": b} for t, a, b in items]
@@ -198,6 +203,8 @@ class Tallied(NamedTuple):
     n_switches: int
     n_stick_slip: int
     impacts: int
+    joint_impacts: int
+    first_point: int  # k for joint k, n for the tip; 0 without an impact
     v_n0: float  # the first impact's impulses and coefficients (COEFFICIENTS), NaN until it ended
     P_c: float
     P_r: float
@@ -601,12 +608,13 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
         first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
         *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
         len(first.stick_slip) if first else 0, len(tip_impacts(result.impacts)),
+        sum(i.point != "tip" for i in result.impacts), point_number(result.impacts[0].point, n) if result.impacts else 0,
         *(getattr(first, name) if first else math.nan for name in COEFFICIENTS), tuple(traj.y[i1].tolist()))
     return _from_tally(tallied, n, impacts)
 
 
 SUMMARY_LEADING = Tallied._fields[:9]  # T0 .. t_impact: the summary's first entries, in its order
-SUMMARY_LATER = ("impacts", "t_sustained", "t_final")  # its entries after the final state
+SUMMARY_LATER = ("impacts", "joint_impacts", "first_point", "t_sustained", "t_final")  # its entries after the final state
 ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy budget, as energy_balance
 BUDGET = ("T0", "Tf", *ENERGY_TERMS)  # what energy_warning reads of a summary, in its order
 
@@ -618,13 +626,14 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
     first = next((impact for impact in impacts if impact.point == "tip"), None)  # the tally is the tip's
     (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
-     W_normal, W_friction, W_gravity, residual, _, _, count, *coefficients, y) = s  # Tallied's fields
+     W_normal, W_friction, W_gravity, residual, _, _, count, joint_count, first_point, *coefficients, y) = s  # Tallied's fields
     return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
             "P_max": P_max, "R_res": R_res, "t_contact": t_contact,
             "t_impact": None if t_impact != t_impact else t_impact,
             "switches": _switch_list(first.switches) if first else [],
             "stick_slip": _switch_list(first.stick_slip) if first and first.stick_slip else [],
             "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": count,
+            "joint_impacts": joint_count, "first_point": first_point or None,
             "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": t_final,
             "energy": {"W_normal": W_normal, "W_friction": W_friction, "W_gravity": W_gravity,
                        "residual": residual},

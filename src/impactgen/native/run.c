@@ -58,7 +58,8 @@ static int under_floor(ig_solver *s, const model_params *p, double t, const doub
 #ifdef MODEL_NJOINT
 /* After a switch recorded in `seg`: a record of its own for each joint that switched there. */
 static int record_joints(const model_machine *m, const ig_segment *seg, ig_segment *segments, int segment_capacity,
-                         int *n_segments)
+                         int *n_segments, ig_tally *tally, const double *t_buf, const double *y_buf,
+                         const double *out_buf)
 {
     for (int k = 0; k < MODEL_NJOINT; ++k) {
         const model_joint_machine *j = &m->joint[k];
@@ -76,6 +77,7 @@ static int record_joints(const model_machine *m, const ig_segment *seg, ig_segme
         rec->P_max = j->P_max;
         rec->delta_r = j->delta_r;
         rec->R_res = j->R_res;
+        if (tally) ig_tally_segment(tally, rec, t_buf, y_buf, out_buf);
     }
     return 0;
 }
@@ -174,7 +176,8 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         seg->point = MODEL_NQ;
         if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
 #ifdef MODEL_NJOINT
-        if (flag == IG_ROOT && record_joints(m, seg, segments, segment_capacity, n_segments) != 0) {
+        if (flag == IG_ROOT && record_joints(m, seg, segments, segment_capacity, n_segments, tally, t_buf, y_buf,
+                                            out_buf) != 0) {
             ig_solver_say(s, "ig_run: no room for the joints' switch records (segment_capacity)");
             return IG_ERR_USAGE;
         }
@@ -199,6 +202,13 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
     const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
     model_outputs(t0, y_buf, out_buf, p);
     ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
+#ifdef MODEL_NJOINT
+    for (int k = 0; k < MODEL_NJOINT; ++k) {  /* the joints in contact from the start */
+        if (m->joint[k].state == MODEL_MACHINE_FREE) continue;
+        tally->joint_impacts++;
+        if (tally->first_point == 0) tally->first_point = model_joint_number(k);
+    }
+#endif
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
     model_machine_atol(m, p, rtol, atol, atol_now);
     const int flag = ig_solver_reset(s, rtol, atol_now, max_steps);

@@ -71,6 +71,7 @@ void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *
     tally->segment_start = t0;
     tally->t_sustained = NAN;
     if (in_contact) {
+        tally->first_point = MODEL_NQ;
         tally->impacts = 1;
         tally->first_begin = tally->start;
         tally->now_start = t0;
@@ -94,7 +95,11 @@ static void fold_impact(ig_tally *a, double contact, int first_folded)
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
                           const double *out_buf)
 {
-    if (seg->point != MODEL_NQ) return;  /* a joint's switch: the summaries are the tip's */
+    if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && a->first_point == 0) a->first_point = seg->point;
+    if (seg->point != MODEL_NQ) {  /* a joint's switch: counted; the summaries are the tip's */
+        if (seg->act & MODEL_ACT_IMPACT_BEGIN) a->joint_impacts++;
+        return;
+    }
     const long k = seg->sample;
     const double *y = y_buf + (size_t)k * MODEL_NSTATE, *out = out_buf + (size_t)k * MODEL_NOUT;
     if (seg->state == MODEL_MACHINE_SUSTAINED && isnan(a->t_sustained)) a->t_sustained = a->segment_start;
@@ -158,6 +163,8 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     run->n_switches = a->first_switches;
     run->n_stick_slip = a->first_stick_slip;
     run->impacts = a->impacts;
+    run->joint_impacts = a->joint_impacts;
+    run->first_point = a->first_point;
     run->t_sustained = a->t_sustained;
     summarize_coefficients(a, run);  /* the first impact's, as the run's switches are */
     if (a->impacts == 0) {
@@ -176,6 +183,8 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     first->n_switches = a->first_switches;
     first->n_stick_slip = a->first_stick_slip;
     first->impacts = a->impacts;
+    first->joint_impacts = a->joint_impacts;
+    first->first_point = a->first_point;
     first->t_sustained = a->t_sustained;
     summarize_coefficients(a, first);
 }

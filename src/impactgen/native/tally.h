@@ -42,7 +42,9 @@ typedef struct {
 typedef struct {
     ig_point start, last;             /* the run's first sample and its latest */
     ig_point first_begin, first_end;  /* the first impact's first and last samples */
-    int impacts;                      /* impacts begun */
+    int impacts;                      /* impacts begun (the tip's) */
+    int joint_impacts;                /* impacts begun at the joints */
+    int first_point;                  /* the point of the run's first impact (ig_segment.point); 0: none yet */
     int first_switches;               /* phase switches within the first impact */
     int first_stick_slip;             /* stick-slip changes within it (exact Coulomb) */
     int ended;                        /* impacts ended */
@@ -66,7 +68,9 @@ typedef struct {
     double T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final;
     double W_normal, W_friction, W_gravity, residual;
     int n_switches, n_stick_slip;     /* the first impact's phase switches and stick-slip changes */
-    int impacts;                      /* in the whole run */
+    int impacts;                      /* in the whole run, at the tip */
+    int joint_impacts;                /* in the whole run, at the joints */
+    int first_point;                  /* where the run's first impact was: MODEL_NQ the tip, k joint k; 0: none */
     /* The first impact's impulses and coefficients of restitution (MODEL section 9), NAN while
      * it has not ended: the normal speed at its start v_n0 (m/s), the normal impulse of
      * compression P_c and of restitution P_r (split at maximum compression), the tangential
