@@ -153,8 +153,8 @@ def _parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="work-precision, RHS and scaling benchmarks with a report")
     bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
     bench.add_argument("--out", type=Path, default=Path("bench-results"), help="report folder")
-    bench.add_argument("--parts", default="workprecision,rhs,scaling,sweep",
-                       help="which benchmarks, comma-separated (workprecision, rhs, scaling, sweep)")
+    bench.add_argument("--parts", default="workprecision,rhs,scaling,sweep,points",
+                       help="which benchmarks, comma-separated (workprecision, rhs, scaling, sweep, points)")
     bench.add_argument("--debug", action="store_true", help="show tracebacks")
 
     stab = sub.add_parser("stability", help="run the catalogue of stiff and extreme cases")
@@ -208,9 +208,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "bench":
             from .bench import run_benchmarks
             parts = {p.strip() for p in args.parts.split(",") if p.strip()}
-            unknown = parts - {"workprecision", "rhs", "scaling", "sweep"}
+            unknown = parts - {"workprecision", "rhs", "scaling", "sweep", "points"}
             if unknown or not parts:
-                raise SceneError("--parts", f"choose from workprecision, rhs, scaling, sweep (got {args.parts!r})")
+                raise SceneError("--parts", f"choose from workprecision, rhs, scaling, sweep, points (got {args.parts!r})")
             report = run_benchmarks(args.out, args.quick, parts)
             for goal in json.loads((report.parent / "benchmark.json").read_text())["targets"]:
                 print(f"{goal['verdict']:>12}  {goal['measured']:<24} {goal['target']}")

@@ -10,7 +10,7 @@ QUICK_LINKS = (2, 3, 5)
 
 
 def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
-    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep") and write the report."""
+    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep", "points") and write the report."""
     from .report import write_report
     from .rhs import rhs_benchmark
     from .scaling import scaling
@@ -33,5 +33,9 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     if "sweep" in parts:
         from .sweep import sweep_benchmark
         sweep_result = sweep_benchmark(quick)
+    points_result = {}
+    if "points" in parts:
+        from .points import points_benchmark
+        points_result = points_benchmark(quick)
     return write_report(out, "quick" if quick else "full", runs, truths, notes, rhs_rows, scaling_rows,
-                        time.perf_counter() - started, sweep_result, c_loop, in_turn)
+                        time.perf_counter() - started, sweep_result, c_loop, in_turn, points_result)

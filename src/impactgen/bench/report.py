@@ -10,6 +10,7 @@ import subprocess
 from dataclasses import asdict
 from pathlib import Path
 
+from .points import points_report_lines, points_targets
 from .sweep import sweep_report_lines, sweep_targets
 from .verdict import verdict
 from .workprecision import Run, Truth, time_at_error
@@ -225,7 +226,8 @@ def where_the_time_goes(c_loop: dict) -> list[str]:
 
 def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], notes: list[str],
                  rhs_rows: list[dict], scaling_rows: list[dict], elapsed_s: float,
-                 sweep_result: dict | None = None, c_loop: dict | None = None, in_turn: dict | None = None) -> Path:
+                 sweep_result: dict | None = None, c_loop: dict | None = None, in_turn: dict | None = None,
+                 points_result: dict | None = None) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     info = machine()
     _write_csv(out / "workprecision.csv", [asdict(r) for r in runs])
@@ -234,12 +236,14 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
     scenes = list(dict.fromkeys(r.scene for r in runs))
     summary = {s: speedups(runs, s) for s in scenes}
     sweep_result = sweep_result or {}
-    goals = targets(runs, rhs_rows, scaling_rows, c_loop, in_turn) + sweep_targets(sweep_result)
+    points_result = points_result or {}
+    goals = (targets(runs, rhs_rows, scaling_rows, c_loop, in_turn) + sweep_targets(sweep_result)
+             + points_targets(points_result))
     (out / "benchmark.json").write_text(json.dumps({
         "mode": mode, "machine": info, "elapsed_s": elapsed_s, "notes": notes,
         "truth": [asdict(t) for t in truths], "runs": [asdict(r) for r in runs],
         "speedups_at_rtol_1e-8": summary, "targets": goals, "rhs": rhs_rows, "scaling": scaling_rows,
-        "sweep": sweep_result, "c_loop": c_loop or {}, "in_turn": in_turn or {},
+        "sweep": sweep_result, "c_loop": c_loop or {}, "in_turn": in_turn or {}, "points": points_result,
     }, indent=1, default=lambda v: None))
     figures = [_plot_workprecision(runs, s, out) for s in scenes]
     if rhs_rows:
@@ -356,6 +360,7 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
                 lines += ["", f"Instructions per step not measured: {c_loop['error']}."]
     if sweep_result:
         lines += sweep_report_lines(sweep_result)
+    lines += points_report_lines(points_result)
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path
