@@ -86,7 +86,7 @@ def test_each_impact_names_its_point_in_the_tables():
     assert set(result.impacts_frame()["point"]) == {"tip", "joint 2"}
 
 
-@pytest.mark.parametrize("mu", [0.5])
+@pytest.mark.parametrize("mu", [0.5, 2.0])
 def test_exact_coulomb_friction_sticks_and_slips_at_the_joints_too(mu):
     """A joint comes to rest on the surface stuck and slipping by the tip's rules; where the
     last link lies flat, its two ends share the holding force and neither is left stuck
