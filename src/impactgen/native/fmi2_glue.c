@@ -325,11 +325,14 @@ static int pruned_joint_reaches(instance *c)
     if (joint == 0) return 0;
     double reach = 0.0;
     for (int i = 1; i <= joint; ++i) reach += link_length(c, i);
+    char lengths[64];
+    if (joint == 1) snprintf(lengths, sizeof lengths, "chain.length[1]");
+    else snprintf(lengths, sizeof lengths, "chain.length[1] + ... + chain.length[%d]", joint);
     say(c, fmi2Error, "logStatusError", "joint %d (the end of link %d) can reach the surface with these values, "
         "but this FMU has no contact at joint %d: it was built from values at which the joint cannot reach, and "
-        "was pruned. chain.length[1] + ... + chain.length[%d] = %.6g m reaches the surface %.6g m below the pivot "
-        "(%s). Build the FMU from a scene with these values (impactgen fmu SCENE --set KEY=VALUE) to have joint "
-        "%d's contact, or keep the surface out of its reach", joint, joint, joint, joint, reach, -c->p.y_s,
+        "was pruned. %s = %.6g m reaches the surface %.6g m below the pivot (%s). Build the FMU from a scene "
+        "with these values (impactgen fmu SCENE --set KEY=VALUE) to have joint %d's contact, or keep the "
+        "surface out of its reach", joint, joint, joint, lengths, reach, -c->p.y_s,
         c->p.surface_initial != 0.0 ? "at the tip's initial height: surface.height_initial, initial.q"
                                     : "surface.height", joint);
     return 1;
