@@ -133,6 +133,19 @@ def test_a_joint_strikes_in_the_fmu_as_in_impactgen_run(fmus, kind):
     assert before["contact[2].delta"] < 0 and before["contact[2].F"] == 0.0
 
 
+def test_a_joint_has_its_own_radius(fmus):
+    """contact.joint_radius[2] sets joint 2's contact alone: a blunter joint dents the surface
+    less, and the tip's impacts before it do not change."""
+    base, _ = simulate(fmus["joint2"], "CoSimulation", 0.13)
+    blunt, log = simulate(fmus["joint2"], "CoSimulation", 0.13, start_values={"contact.joint_radius[2]": 0.05})
+    assert log.errors == []
+    assert blunt[-1]["contact[2].impacts"] == base[-1]["contact[2].impacts"] == 1
+    assert blunt[-1]["contact[2].delta_max"] < 0.7 * base[-1]["contact[2].delta_max"]
+    early = base["time"] < 0.12
+    for field in ("delta_max", "u[1]", "q[3]"):
+        assert np.array_equal(blunt[early][field], base[early][field]), field
+
+
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
 def test_two_points_that_start_on_the_surface_strike_together(fmus, kind):
     result, log = simulate(fmus["both"], kind, BOTH_STOP)
