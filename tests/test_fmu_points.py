@@ -244,3 +244,33 @@ def test_the_c_driver_lists_the_impacts_by_point(tmp_path):
             assert float(printed[f"impact[{k}].{field}"]) == pytest.approx(getattr(impact, field), rel=1e-8), field
     assert f"impact[{len(run.impacts) + 1}].point" not in printed
     assert [printed[f"impact[{k}].point"] for k in (1, 2, 3)] == ["tip", "tip", "joint 2"]
+
+
+@pytest.mark.parametrize("overrides", [JOINT2, {}], ids=["joint2-model", "paper-model"])
+def test_the_c_reach_test_is_pythons_rule(overrides):
+    """model_pruned_reach (generated C, what the FMU and the C driver call) answers as
+    reachable_joints (Python, which picks the model) on random lengths, surfaces and angles:
+    the first joint the model lacks that the values let reach, or 0."""
+    from impactgen.build import compile_model
+    from impactgen.model_params import fill_params
+    base = impactgen.load_scene("paper", overrides)
+    model = compile_model(model_spec(base))
+    ffi, lib, n = model.ffi, model.lib, base.n
+    rng = np.random.default_rng(38)
+    checked = reaching = 0
+    while checked < 200:
+        q = rng.uniform(-np.pi / 2, np.pi / 2 if n > 2 else 0.0, n)
+        lengths = rng.uniform(0.2, 2.0, n)
+        height = "initial" if rng.random() < 0.5 else float(-rng.uniform(0.1, 1.2) * lengths.sum())
+        try:
+            scene = impactgen.load_scene("paper", {**overrides, "chain.length": list(lengths),
+                                                   "initial.q": list(q), "surface.height": height})
+        except impactgen.SceneError:  # a start below the surface: refused before any of this
+            continue
+        checked += 1
+        missing = [j for j in reachable_joints(scene) if j not in model.spec.joints]
+        y0 = ffi.new("double[]", list(scene.q0) + list(scene.u0) + [0.0] * (model.nstate - 2 * n))
+        assert lib.model_pruned_reach(fill_params(model, scene), y0) == (missing[0] if missing else 0), (
+            lengths, q, height)
+        reaching += bool(missing)
+    assert 20 < reaching < 180  # both answers were met
