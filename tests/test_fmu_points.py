@@ -33,6 +33,11 @@ JOINT2_STOP = 0.2  # the tip's first three impacts and joint 2's first
 BOTH_AT_ONCE = {"initial.q_deg": [-30, 0], "initial.u": [-1, 0], "surface.height": "initial",
                 "solver.t_end": 0.01}
 BOTH_STOP = 1e-3
+# a 4-link chain over a surface every joint can reach: joint 3, then joint 2 strike between the
+# tip's impacts
+THREE_JOINTS = {"chain.links": 4, "chain.length": [0.5] * 4, "chain.mass": [1] * 4,
+                "initial.q_deg": [-10] * 4, "initial.u": [-2, 0, 0, 0], "surface.height": -0.4,
+                "solver.t_end": 0.15}
 POINT_OUTPUTS = ("delta", "delta_rate", "v_x", "v_y", "F", "F_f")
 POINT_DISCRETE = ("phase", "impacts", "delta_max", "delta_r", "P_max")
 
@@ -41,7 +46,8 @@ POINT_DISCRETE = ("phase", "impacts", "delta_max", "delta_r", "P_max")
 def fmus(tmp_path_factory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("fmu-points")
     return {"joint2": build_fmu(impactgen.load_scene("paper", JOINT2), folder / "joint2.fmu"),
-            "both": build_fmu(impactgen.load_scene("paper", BOTH_AT_ONCE), folder / "both.fmu")}
+            "both": build_fmu(impactgen.load_scene("paper", BOTH_AT_ONCE), folder / "both.fmu"),
+            "three": build_fmu(impactgen.load_scene("paper", THREE_JOINTS), folder / "three.fmu")}
 
 
 class Log:
@@ -161,6 +167,25 @@ def test_two_points_that_start_on_the_surface_strike_together(fmus, kind):
     expected = expected_switches(run)
     assert [s[1:] for s in log.switches] == [s[1:] for s in expected]
     np.testing.assert_allclose([s[0] for s in log.switches], [s[0] for s in expected], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_three_joints_each_strike_by_name(fmus, kind):
+    scene = impactgen.load_scene("paper", THREE_JOINTS)
+    assert reachable_joints(scene) == (1, 2, 3)
+    result, log = simulate(fmus["three"], kind, 0.15)
+    assert log.errors == []
+    run = impactgen.simulate(scene)
+    assert [i.point for i in run.impacts] == ["tip", "joint 3", "tip", "joint 2"]
+    starts = [(t, point) for t, point, a, b in log.switches if a == "free"]
+    assert [point for _, point in starts] == [i.point for i in run.impacts]
+    # FMPy's own CVODE (Model Exchange) finds these roots within a few 1e-9 s
+    np.testing.assert_allclose([t for t, _ in starts], [i.t_start for i in run.impacts], rtol=0,
+                               atol=1e-9 if kind == "CoSimulation" else 1e-8)
+    last = result[-1]
+    assert [last[f"contact[{j}].impacts"] for j in (1, 2, 3)] == [0, 1, 1] and last["impacts"] == 2
+    for j, impact in ((3, run.impacts[1]), (2, run.impacts[3])):
+        assert last[f"contact[{j}].delta_max"] == pytest.approx(impact.delta_max, rel=1e-6)
 
 
 # values that let joint 1, pruned from the JOINT2 model, reach the surface: the FMU's start
