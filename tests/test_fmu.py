@@ -246,8 +246,9 @@ BELOW_SURFACE = [  # (FMU start values, the same as scene overrides, the key nam
 ]
 ON_OR_ABOVE = [  # the same kinds of start, just on the allowed side
     ({"surface.height_initial": False, "surface.height": -1.9}, {"surface.height": -1.9}),
-    ({"surface.height_initial": False, "surface.height": -0.9398, "initial.q[2]": np.radians(60.0)},
-     {"surface.height": -0.9398, "initial.q_deg": [-70.0, 60.0]}),
+    # (joint 1 just above the surface, {"surface.height": -0.9398, "initial.q_deg": [-70.0, 60.0]},
+    # can reach it, and the paper's model has no contact at joint 1: its FMU refuses that start,
+    # and the FMU built from those values runs it: tests/test_fmu_points.py)
 ]
 
 

@@ -10,7 +10,10 @@
  * Run:
  *     examples/c/impact_driver              # the run's summary as "name value" lines
  *     examples/c/impact_driver --repeat 500 # and the wall time per run, warm (impactgen bench)
- * The summary is in the units of `impactgen run`.
+ * The summary is in the units of `impactgen run`. After it, each impact by the point that
+ * struck (the tip, or a joint when the model has contact at the joints), in order of its start:
+ *     impact[3].point joint 2
+ *     impact[3].t_start 0.12628647...    (and t_end, delta_max, delta_r, P_max)
  */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <math.h>
@@ -26,6 +29,19 @@
 #define USE_JACOBIAN (MODEL_HAS_JACOBIAN && IG_METHOD_USES_JACOBIAN(MODEL_SCENE_METHOD))
 #define CAPACITY 64  /* segments (and their end samples) per call of ig_run */
 #define MAX_SEGMENTS 100000L  /* phase switches in one run: beyond this, stop rather than hang */
+#define MAX_LISTED 256  /* impacts listed by point (the summary counts them all) */
+
+/* One impact of one point, from the segment records of its switches. */
+typedef struct {
+    int point;  /* MODEL_NQ: the tip; 1 to MODEL_NQ - 1: that joint (ig_segment.point) */
+    double t_start, t_end, delta_max, delta_r, P_max;
+} impact_line;
+
+typedef struct {
+    int n;                    /* impacts begun (the first MAX_LISTED are kept) */
+    int open[MODEL_NQ + 1];   /* each point's impact going on: its index, or -1 */
+    impact_line line[MAX_LISTED];
+} impact_list;
 
 typedef struct {
     const char *status;
@@ -34,11 +50,40 @@ typedef struct {
     ig_summary summary;  /* the run's (to a time) or its first impact's (to separation) */
 } run_result;
 
+/* A new impact of `point` at t. */
+static void impact_begins(impact_list *list, int point, double t)
+{
+    list->open[point] = list->n < MAX_LISTED ? list->n : -1;
+    if (list->n < MAX_LISTED) list->line[list->n] = (impact_line){point, t, NAN, NAN, NAN, NAN};
+    list->n += 1;
+}
+
+/* Follow the impacts of every point through the segment records of one call of ig_run: each
+ * switch has a record for the tip and one for each joint that switched (seg->point). */
+static void follow_impacts(impact_list *list, const ig_segment *segments, int n)
+{
+    for (int k = 0; k < n; ++k) {
+        const ig_segment *seg = &segments[k];
+        if (seg->act & MODEL_ACT_IMPACT_BEGIN) impact_begins(list, seg->point, seg->t);
+        const int i = list->open[seg->point];
+        if (i < 0) continue;
+        if (seg->act & MODEL_ACT_MAX_COMPRESSION) {
+            list->line[i].delta_max = seg->delta_max;
+            list->line[i].delta_r = seg->delta_r;
+            list->line[i].P_max = seg->P_max;
+        }
+        if (seg->act & MODEL_ACT_IMPACT_END) {
+            list->line[i].t_end = seg->t;
+            list->open[seg->point] = -1;
+        }
+    }
+}
+
 /* One run of the scene from its start on solver s: begun (ig_run_begin: the machine started,
  * the solver reset with the scene's tolerances), then the phase machine's loop in one call
  * (ig_run), its summary tallied on the way (ig_summarize), as impactgen's Python wrapper
- * does. Only segment ends are sampled. */
-static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_result *r)
+ * does. Only segment ends are sampled. With `list`, the impacts by point go there. */
+static void run_scene(ig_solver *s, const model_params *inputs, const double *y0, run_result *r, impact_list *list)
 {
     double t_buf[CAPACITY], y_buf[CAPACITY * MODEL_NSTATE], out_buf[CAPACITY * MODEL_NOUT];
     ig_segment segments[CAPACITY];
@@ -53,6 +98,16 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
     const int start = ig_run_begin(s, &m, &p, r->t, r->y, MODEL_SCENE_RUN_TO_TIME, MODEL_SCENE_RTOL, MODEL_SCENE_ATOL,
                                    MODEL_SCENE_MAX_STEPS, atol, t_buf, y_buf, out_buf, &tally);
     if (start < 0) fprintf(stderr, "cannot begin the run: %s\n", ig_solver_message(s));
+    if (list) {  /* the points in contact from the start */
+        list->n = 0;
+        for (int i = 0; i <= MODEL_NQ; ++i) list->open[i] = -1;
+        if (start == MODEL_START_CONTACT) impact_begins(list, MODEL_NQ, r->t);
+#ifdef MODEL_NJOINT
+        for (int k = 0; k < MODEL_NJOINT; ++k) {
+            if (m.joint[k].state != MODEL_MACHINE_FREE) impact_begins(list, model_joint_number(k), r->t);
+        }
+#endif
+    }
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY || start < 0) {
         r->status = start < 0 ? "failed" : "no-impact";
         ig_summarize(&tally, &r->summary, &first);
@@ -65,6 +120,7 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
         const int flag = ig_run(s, &m, &p, &r->t, r->y, MODEL_SCENE_T_END, MODEL_SCENE_T_END, MODEL_SCENE_ATOL, MAX_SEGMENTS - begun,
                                 0, t_buf, y_buf, out_buf, NULL, CAPACITY, &n, segments, CAPACITY, &n_segments, &tally);
         begun += n_segments;
+        if (list) follow_impacts(list, segments, n_segments);
         n = 0;  /* the next call writes into emptied buffers */
         if (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL) continue;
         if (flag < 0) {
@@ -90,6 +146,14 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s = %g is outside %s\n", model_param_key(bad), *model_param_slot(&p, bad), range);
         return 2;
     }
+    /* values other than the scene's (set above model_derive) must keep out of the surface's reach
+     * the joints the model has no contact for */
+    const int pruned = model_pruned_reach(&p, y0);
+    if (pruned != 0) {
+        fprintf(stderr, "joint %d can reach the surface with these values, but the model was generated without "
+                "contact at it (pruned): generate it from a scene with these values\n", pruned);
+        return 2;
+    }
     for (int k = 0; k < MODEL_NSTATE; ++k) atol[k] = MODEL_SCENE_ATOL;
     char err[512];
     ig_solver *s = ig_solver_new(MODEL_SCENE_METHOD, USE_JACOBIAN, MODEL_SCENE_RTOL, atol,
@@ -99,13 +163,14 @@ int main(int argc, char **argv)
         return 4;
     }
     run_result r;
-    run_scene(s, &p, y0, &r);
+    impact_list impacts;
+    run_scene(s, &p, y0, &r, &impacts);
     ig_stats stats;
     ig_solver_stats(s, &stats);
     if (repeat > 0) {  /* warm runs on the same solver, each reset by ig_run_begin (as a warm Python process reuses one) */
         struct timespec a, b;
         clock_gettime(CLOCK_MONOTONIC, &a);
-        for (long k = 0; k < repeat; ++k) run_scene(s, &p, y0, &r);
+        for (long k = 0; k < repeat; ++k) run_scene(s, &p, y0, &r, NULL);
         clock_gettime(CLOCK_MONOTONIC, &b);
         printf("ms_per_run %.6f\n", ((b.tv_sec - a.tv_sec) * 1e3 + (b.tv_nsec - a.tv_nsec) * 1e-6) / (double)repeat);
     }
@@ -129,6 +194,16 @@ int main(int argc, char **argv)
 #endif
     printf("W_gravity %.17g\n", sum->W_gravity);
     printf("steps %ld\n", stats.nsteps);
+    for (int i = 0; i < impacts.n && i < MAX_LISTED; ++i) {
+        const impact_line *line = &impacts.line[i];
+        if (line->point == MODEL_NQ) printf("impact[%d].point tip\n", i + 1);
+        else printf("impact[%d].point joint %d\n", i + 1, line->point);
+        printf("impact[%d].t_start %.17g\n", i + 1, line->t_start);
+        printf("impact[%d].t_end %.17g\n", i + 1, line->t_end);
+        printf("impact[%d].delta_max %.17g\n", i + 1, line->delta_max);
+        printf("impact[%d].delta_r %.17g\n", i + 1, line->delta_r);
+        printf("impact[%d].P_max %.17g\n", i + 1, line->P_max);
+    }
     ig_solver_free(s);
     return strcmp(r.status, "ok") == 0 || strcmp(r.status, "no-impact") == 0 ? 0 : 4;
 }

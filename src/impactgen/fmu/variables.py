@@ -5,12 +5,16 @@ reference means the same thing on both sides. Parameters are the scene's inputs
 (`chain.length[1]`, `rod.E`, `contact.friction`, `initial.u[2]`, ...); the continuous states
 are `q[i]`, `u[i]`, the works `W_normal`, `W_friction` and the impulses `P_normal`,
 `P_friction`; the outputs are the tip's
-penetration, forces and speeds and the energies, and the machine's discrete outputs.
+penetration, forces and speeds and the energies, and the machine's discrete outputs. A model
+with contact at joints (ModelSpec.joints) has the same per point, in FMI 2.0's structured
+naming: `contact[2].delta`, `contact[2].F`, ... and `contact[2].phase`, `contact[2].impacts`,
+`contact[2].delta_max`, ... for joint 2 (the end of link 2); the tip's keep their names.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..codegen.emit import POINT_OUTPUTS
 from ..codegen.expressions import ModelExpressions
 from ..codegen.parameters import Field
 
@@ -30,13 +34,22 @@ class Variable:
     unit: str
     description: str
     kind: str  # one of KINDS
-    index: int  # struct field, state, output or link index, by kind
+    index: int  # struct field, state, output or link index, by kind; a discrete output's point
+    # (0 the tip, k + 1 the joint in slot k of the machine's joints)
     derivative_of: int | None = None  # vr of the state, for a derivative
 
 
-def variables(model: ModelExpressions, scene) -> list[Variable]:
-    """Every FMU variable of `model`, with start values from `scene`."""
+DISCRETE = (("delta_max", "m", "maximum compression of {of} last impact"),
+            ("delta_r", "m", "permanent deformation of {of} last impact (Eq. 12)"),
+            ("P_max", "N", "normal force at {of} last maximum compression"))
+
+
+def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()) -> list[Variable]:
+    """Every FMU variable of `model`, with start values from `scene`. `output_names`: the
+    generated model's outputs in C order (GeneratedModel.output_names), the joints' after
+    the tip's; without it, only the tip's are shown."""
     n = model.spec.links
+    joints = model.spec.joints
     out: list[Variable] = []
 
     def add(**kw) -> Variable:
@@ -69,16 +82,28 @@ def variables(model: ModelExpressions, scene) -> list[Variable]:
             text, _, unit = doc.rpartition(", ")
             add(name=label, type="Real", causality="output", variability="continuous", initial="calculated",
                 start=None, unit=unit, description=text, kind="output", index=k)
-    add(name="phase", type="Integer", causality="output", variability="discrete", initial="calculated",
-        start=None, unit="", description="machine state: 0 free, 1 elastic, 2 elastoplastic, 3 restitution, "
-        "4 reloading, 5 sustained", kind="phase", index=0)
-    add(name="impacts", type="Integer", causality="output", variability="discrete", initial="calculated",
-        start=None, unit="", description="impacts begun so far", kind="impacts", index=0)
-    for name, unit, doc in (("delta_max", "m", "maximum compression of the last impact"),
-                            ("delta_r", "m", "permanent deformation of the last impact (Eq. 12)"),
-                            ("P_max", "N", "normal force at the last maximum compression")):
-        add(name=name, type="Real", causality="output", variability="discrete", initial="calculated",
-            start=None, unit=unit, description=doc, kind=name, index=0)
+    c_index = {name: k for k, name in enumerate(output_names)}
+    for j in joints:
+        for point, doc in POINT_OUTPUTS:
+            if f"{point}_J{j}" in c_index:
+                text, _, unit = doc.rpartition(", ")
+                add(name=f"contact[{j}].{point}", type="Real", causality="output", variability="continuous",
+                    initial="calculated", start=None, unit=unit, description=f"joint {j}: {text}", kind="output",
+                    index=c_index[f"{point}_J{j}"])
+    # the machine's discrete outputs, per point: the tip's (index 0), then each joint's (its slot + 1)
+    points = [(0, "", "the tip's" if joints else "the")] + [
+        (slot + 1, f"contact[{j}].", f"joint {j}'s") for slot, j in enumerate(joints) if f"delta_J{j}" in c_index]
+    for point, prefix, of in points:
+        whose = "" if of == "the" else f"{of} "
+        add(name=f"{prefix}phase", type="Integer", causality="output", variability="discrete",
+            initial="calculated", start=None, unit="", description=f"{whose}machine state: 0 free, 1 elastic, "
+            "2 elastoplastic, 3 restitution, 4 reloading, 5 sustained", kind="phase", index=point)
+        add(name=f"{prefix}impacts", type="Integer", causality="output", variability="discrete",
+            initial="calculated", start=None, unit="", description=f"{whose}impacts begun so far", kind="impacts",
+            index=point)
+        for name, unit, doc in DISCRETE:
+            add(name=f"{prefix}{name}", type="Real", causality="output", variability="discrete",
+                initial="calculated", start=None, unit=unit, description=doc.format(of=of), kind=name, index=point)
     for k, f in enumerate(model.params):
         if f.row.kind == "input":
             add(name=f.key, type=f.row.fmi_type, causality="parameter", variability="fixed", initial="exact",

@@ -14,6 +14,12 @@
  * statically), the same driver as impactgen's engine, at the tolerance of
  * fmi2SetupExperiment. The integrator steps on its own across communication points (states
  * there are interpolated), so the step size a master chooses does not change the events.
+ *
+ * Contact at the joints (a model generated with MODEL_NJOINT): each joint that can reach the
+ * surface has its own machine state, events (after the tip's), outputs and impact record; the
+ * glue logs each point's switches and gives each point's discrete outputs. The joints the
+ * model was pruned of must stay out of reach: fmi2ExitInitializationMode refuses values that
+ * would let one reach the surface (model_pruned_reach), naming it.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -38,7 +44,17 @@ enum mode { INSTANTIATED, INITIALIZATION, EVENT, CONTINUOUS, STEPPING, TERMINATE
 #define USE_JACOBIAN (MODEL_HAS_JACOBIAN && IG_METHOD_USES_JACOBIAN(MODEL_SCENE_METHOD))
 #define FAR_FUTURE 1e30  /* the end of a run with no stop time */
 #define STOP_SLACK 1e-9  /* a last step may pass the stop time by this much (relative): rounding of t + h */
-#define RUN_CAPACITY 8   /* samples and segment records per ig_run call of fmi2DoStep */
+#ifdef MODEL_NJOINT
+#define FMU_NJOINT MODEL_NJOINT           /* the joints with contact code */
+#define FMU_NTIP_EVENT MODEL_NTIP_EVENT   /* the tip's events; each joint's follow */
+#else
+#define FMU_NJOINT 0
+#define FMU_NTIP_EVENT MODEL_NEVENT
+#endif
+#define RUN_CAPACITY 8   /* samples per ig_run call of fmi2DoStep */
+/* segment records per ig_run call: a switch writes one for the tip and one per joint that
+ * switched (run.c, SWITCH_RECORDS) */
+#define RUN_SEGMENTS (RUN_CAPACITY * (1 + FMU_NJOINT))
 #define MAX_SEGMENTS 100000  /* phase segments within one fmi2DoStep (chattering impacts beyond) */
 
 typedef struct {
@@ -256,18 +272,25 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
     return fmi2OK;
 }
 
+/* The length of link i (from 1), chain.length[i], m. */
+static double link_length(instance *c, int i)
+{
+    char key[32];
+    snprintf(key, sizeof key, "chain.length[%d]", i);
+    for (int k = 0; k < MODEL_NPARAM; ++k) {
+        if (strcmp(model_param_key(k), key) == 0) return *model_param_slot(&c->p, k);
+    }
+    return NAN;
+}
+
 /* The start load_scene refuses (scene.py, _check_physics), by the same rule: a tip inside the
  * surface, or a pivot or joint below it, by more than the touch tolerance. Logs the variable
  * and the link and returns 1; 0 for a start on or above the surface. After prepare (p.y_s). */
 static int start_below_surface(instance *c)
 {
     double length[MODEL_NQ] = {0}, height[MODEL_NQ + 1] = {0}, total = 0.0;
-    char key[32];
     for (int i = 0; i < MODEL_NQ; ++i) {
-        snprintf(key, sizeof key, "chain.length[%d]", i + 1);
-        for (int k = 0; k < MODEL_NPARAM; ++k) {
-            if (strcmp(model_param_key(k), key) == 0) length[i] = *model_param_slot(&c->p, k);
-        }
+        length[i] = link_length(c, i + 1);
         total += length[i];
         height[i + 1] = height[i] + length[i] * sin(c->q0[i]);
     }
@@ -292,6 +315,29 @@ static int start_below_surface(instance *c)
     return 0;
 }
 
+/* A joint this model was pruned of (it could not reach the surface at the values the FMU was
+ * built from) that could reach it with the values set now: the FMU has no contact law for it,
+ * so it would pass through the surface unseen. Logs the joint and the values and returns 1;
+ * 0 when the model fits the values. After prepare (p.y_s: the surface at the start). */
+static int pruned_joint_reaches(instance *c)
+{
+    const int joint = model_pruned_reach(&c->p, c->y);
+    if (joint == 0) return 0;
+    double reach = 0.0;
+    for (int i = 1; i <= joint; ++i) reach += link_length(c, i);
+    char lengths[64];
+    if (joint == 1) snprintf(lengths, sizeof lengths, "chain.length[1]");
+    else snprintf(lengths, sizeof lengths, "chain.length[1] + ... + chain.length[%d]", joint);
+    say(c, fmi2Error, "logStatusError", "joint %d (the end of link %d) can reach the surface with these values, "
+        "but this FMU has no contact at joint %d: it was built from values at which the joint cannot reach, and "
+        "was pruned. %s = %.6g m reaches the surface %.6g m below the pivot (%s). Build the FMU from a scene "
+        "with these values (impactgen fmu SCENE --set KEY=VALUE) to have joint %d's contact, or keep the "
+        "surface out of its reach", joint, joint, joint, lengths, reach, -c->p.y_s,
+        c->p.surface_initial != 0.0 ? "at the tip's initial height: surface.height_initial, initial.q"
+                                    : "surface.height", joint);
+    return 1;
+}
+
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
     instance *c = (instance *)comp;
@@ -299,7 +345,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     const char *range = "";
     const int bad = prepare(c, &range);
     if (bad != MODEL_PARAMS_OK) return bad_parameter(c, bad, range);
-    if (start_below_surface(c)) {
+    if (start_below_surface(c) || pruned_joint_reaches(c)) {
         c->mode = FAILED;
         return fmi2Error;
     }
@@ -345,6 +391,35 @@ fmi2Status fmi2Reset(fmi2Component comp)
 }
 
 /* ---- variables ---- */
+/* A discrete output of the machine (VAR_PHASE, VAR_IMPACTS, VAR_DELTA_MAX, ...) of point
+ * `point`: 0 the tip, k + 1 the joint in the machine's slot k. */
+static double machine_value(const instance *c, int kind, int point)
+{
+#ifdef MODEL_NJOINT
+    if (point > 0) {
+        const model_joint_machine *j = &c->m.joint[point - 1];
+        switch (kind) {
+        case VAR_PHASE: return j->state;
+        case VAR_IMPACTS: return j->impacts;
+        case VAR_DELTA_MAX: return j->delta_max;
+        case VAR_DELTA_R: return j->delta_r;
+        case VAR_P_MAX: return j->P_max;
+        default: return NAN;
+        }
+    }
+#else
+    (void)point;
+#endif
+    switch (kind) {
+    case VAR_PHASE: return c->m.state;
+    case VAR_IMPACTS: return c->m.impacts;
+    case VAR_DELTA_MAX: return c->m.delta_max;
+    case VAR_DELTA_R: return c->m.delta_r;
+    case VAR_P_MAX: return c->m.P_max;
+    default: return NAN;
+    }
+}
+
 static double real_value(instance *c, const fmu_variable *v)
 {
     double out[MODEL_NOUT], ydot[MODEL_NSTATE];
@@ -366,9 +441,9 @@ static double real_value(instance *c, const fmu_variable *v)
     case VAR_OUTPUT:
         model_outputs(c->t, c->y, out, &c->p);
         return out[v->index];
-    case VAR_DELTA_MAX: return c->m.delta_max;
-    case VAR_DELTA_R: return c->m.delta_r;
-    case VAR_P_MAX: return c->m.P_max;
+    case VAR_DELTA_MAX:
+    case VAR_DELTA_R:
+    case VAR_P_MAX: return machine_value(c, v->kind, v->index);
     default: return NAN;
     }
 }
@@ -394,7 +469,7 @@ fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], siz
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'I');
         if (!v) return fmi2Error;
-        value[k] = v->kind == VAR_PHASE ? c->m.state : c->m.impacts;
+        value[k] = (fmi2Integer)machine_value(c, v->kind, v->index);
     }
     return fmi2OK;
 }
@@ -534,11 +609,25 @@ static int handle_events(instance *c, const int *fired_by_integrator)
     int act = 0;
     const int crossed = fired_by_integrator ? 1 : model_machine_crossed(&c->m, ev, fired);
     if (crossed) {
+        const int *flags = fired_by_integrator ? fired_by_integrator : fired;
+        int events[MODEL_NEVENT], directions[MODEL_NEVENT], tip_fired = 0;
+        const int watched = model_machine_events(&c->m, events, directions);
+        for (int k = 0; k < watched; ++k) tip_fired |= flags[k] && events[k] < FMU_NTIP_EVENT;
         const int before = c->m.state;
-        act = model_machine_switch(&c->m, &c->p, c->t, c->y, fired_by_integrator ? fired_by_integrator : fired);
+        act = model_machine_switch(&c->m, &c->p, c->t, c->y, flags);
         if (act) {
-            say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", c->t, model_machine_state_name(before),
-                model_machine_state_name(c->m.state));
+            if (tip_fired) {
+                say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", c->t, model_machine_state_name(before),
+                    model_machine_state_name(c->m.state));
+            }
+#ifdef MODEL_NJOINT
+            for (int k = 0; k < MODEL_NJOINT; ++k) {  /* each joint that switched, by name */
+                const model_joint_machine *j = &c->m.joint[k];
+                if (!j->act) continue;
+                say(c, fmi2OK, "logEvents", "t = %.17g: joint %d: %s -> %s", c->t, model_joint_number(k),
+                    model_machine_state_name(j->was), model_machine_state_name(j->state));
+            }
+#endif
             model_events(c->t, c->y, ev, &c->p);
         }
     }
@@ -715,11 +804,19 @@ static const char *slip_label(int state, double slip)
 }
 
 /* Log the switches of the segments ig_run recorded: "t = ...: from -> to" for a change of
- * contact phase, and for a stick-slip change (its labels). */
+ * the tip's contact phase, "t = ...: joint k: from -> to" for a joint's (a record of its own,
+ * seg->point), and for a stick-slip change (its labels). */
 static void log_switches(const instance *c, const ig_segment *segments, int n)
 {
     for (int k = 0; k < n; ++k) {
         const ig_segment *seg = &segments[k];
+        if (seg->point != MODEL_NQ) {
+            if (seg->next_state != seg->state) {
+                say(c, fmi2OK, "logEvents", "t = %.17g: joint %d: %s -> %s", seg->t, seg->point,
+                    model_machine_state_name(seg->state), model_machine_state_name(seg->next_state));
+            }
+            continue;
+        }
         if (seg->next_state != seg->state) {
             say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", seg->t, model_machine_state_name(seg->state),
                 model_machine_state_name(seg->next_state));
@@ -745,14 +842,14 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
         return fail(c, "%s", "fmi2DoStep: the step goes beyond the stop time of fmi2SetupExperiment");
     }
     double t_buf[RUN_CAPACITY], y_buf[RUN_CAPACITY * MODEL_NSTATE], out_buf[RUN_CAPACITY * MODEL_NOUT];
-    ig_segment segments[RUN_CAPACITY];
+    ig_segment segments[RUN_SEGMENTS];
     int flag = IG_TARGET;
     long begun = 0;
     while (c->t_int <= target) {  /* (at target only to switch at a root left there) */
         int n = 0, n_segments = 0;
         flag = ig_run(c->solver, &c->m, &c->p, &c->t_int, c->y_int, t_stop, target, MODEL_SCENE_ATOL,
                       MAX_SEGMENTS - begun, 0, t_buf, y_buf, out_buf, NULL, RUN_CAPACITY, &n, segments,
-                      RUN_CAPACITY, &n_segments, NULL);
+                      RUN_SEGMENTS, &n_segments, NULL);
         begun += n_segments;
         log_switches(c, segments, n_segments);
         if (flag != IG_BUFFER_FULL && flag != IG_SEGMENTS_FULL) break;
