@@ -70,13 +70,15 @@ static double sign_of(double v)
     return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
 }
 
-/* Hairer's starting step: from the sizes of y0, f(y0) and an estimate of the second derivative. */
+/* Hairer's starting step: from the sizes of y0, f(y0) and an estimate of the second derivative
+ * (the quadratures left out of the norms, as of the error test). */
 static double first_step(ig_dopri5 *r, double *scratch, double *f1)
 {
     const int n = r->n;
     const double *y = r->y, *f0 = r->k[0];
     double dnf = 0.0, dny = 0.0;
-    for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < r->ntested; ++j) {
+        const int i = r->tested[j];
         const double sk = r->atol[i] + r->rtol * fabs(y[i]);
         dnf += (f0[i] / sk) * (f0[i] / sk);
         dny += (y[i] / sk) * (y[i] / sk);
@@ -87,7 +89,8 @@ static double first_step(ig_dopri5 *r, double *scratch, double *f1)
     for (int i = 0; i < n; ++i) scratch[i] = y[i] + h * f0[i];
     if (rhs(r, r->t + h, scratch, f1) != 0) return fmin(h * 1e-3, span);
     double der2 = 0.0;
-    for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < r->ntested; ++j) {
+        const int i = r->tested[j];
         const double sk = r->atol[i] + r->rtol * fabs(y[i]);
         der2 += ((f1[i] - f0[i]) / sk) * ((f1[i] - f0[i]) / sk);
     }
@@ -102,7 +105,7 @@ int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn,
 {
     memset(r, 0, sizeof *r);
     if (n < 1 || max_events < 0 || !rhs_fn || (max_events > 0 && !events)) return -1;
-    const size_t n_vectors = IG_DOPRI5_STAGES + 5 + 6;  /* k, cont, atol, y, y1, y6, tmp, ymid */
+    const size_t n_vectors = IG_DOPRI5_STAGES + 5 + 7;  /* k, cont, atol, y, y1, y6, tmp, ymid, tested */
     const size_t n_event_arrays = 8;                      /* g, side, g_end, g_lo, g_hi, g_now, t_root, directions */
     double *memory = (double *)malloc(sizeof(double) * (n_vectors * (size_t)n + n_event_arrays * (size_t)(max_events + 1)));
     if (!memory) return -1;
@@ -118,6 +121,8 @@ int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn,
     for (int s = 0; s < IG_DOPRI5_STAGES; ++s, next += n) r->k[s] = next;
     for (int s = 0; s < 5; ++s, next += n) r->cont[s] = next;
     for (size_t v = 0; v < sizeof vectors / sizeof *vectors; ++v, next += n) *vectors[v] = next;
+    r->tested = (int *)next;  /* n ints fit in n doubles */
+    next += n;
     const int m = max_events + 1;  /* never an empty array */
     for (size_t v = 0; v < sizeof event_arrays / sizeof *event_arrays; ++v, next += m) *event_arrays[v] = next;
     r->directions = (int *)next;  /* m ints fit in m doubles */
@@ -138,6 +143,12 @@ int ig_dopri5_start(ig_dopri5 *r, double t0, const double *y0, double t_stop, do
     if (nevents < 0 || nevents > r->max_events) return IG_DOPRI5_NOT_STARTED;
     r->rtol = rtol;
     memcpy(r->atol, atol, sizeof(double) * (size_t)n);
+    int quadratures = 0;
+    r->ntested = 0;
+    for (int i = 0; i < n; ++i) {
+        if (atol[i] < IG_DOPRI5_QUADRATURE_ATOL) r->tested[r->ntested++] = i;
+        else r->tested[n - 1 - quadratures++] = i;
+    }
     r->t = r->t_old = t0;
     r->t_stop = t_stop;
     memcpy(r->y, y0, sizeof(double) * (size_t)n);
@@ -199,13 +210,20 @@ static int attempt(ig_dopri5 *r, double h, double *y1, double *y6, double *err)
     }
     if (rhs(r, t + h, y1, k[6]) != 0) return -1;
     double sum = 0.0;
-    for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < r->ntested; ++j) {
+        const int i = r->tested[j];
         const double e = h * (e1 * k[0][i] + e3 * k[2][i] + e4 * k[3][i] + e5 * k[4][i] + e6 * k[5][i] + e7 * k[6][i]);
         const double sk = r->atol[i] + r->rtol * larger(fabs(y[i]), fabs(y1[i]));
         sum += (e / sk) * (e / sk);
     }
+    int finite = 1;  /* the quadratures' errors count as 0 in the norm (IG_DOPRI5_QUADRATURE_ATOL) */
+    for (int j = r->ntested; j < n; ++j) {
+        const int i = r->tested[j];
+        const double e = h * (e1 * k[0][i] + e3 * k[2][i] + e4 * k[3][i] + e5 * k[4][i] + e6 * k[5][i] + e7 * k[6][i]);
+        finite &= isfinite(e) != 0;
+    }
     *err = sqrt(sum / n);
-    return isfinite(*err) ? 0 : -1;
+    return finite && isfinite(*err) ? 0 : -1;
 }
 
 /* Hairer's stiffness estimate of an accepted step, h |f(y1) - f(y6)| / |y1 - y6| (y6 the
