@@ -250,7 +250,7 @@ class TallyRecords:
         if made is None:
             record = self._layout.record
             values = record.unpack_from(self._raw, k * record.size)
-            made = self._made[k] = Tallied(*values[:_Y_FINAL], values[_Y_FINAL:])
+            made = self._made[k] = Tallied._make(values[:_Y_FINAL] + (values[_Y_FINAL:],))
         return made
 
     def __len__(self) -> int:
@@ -365,11 +365,15 @@ class SimulationResult:
             return _from_tally(self.tallied[1], self.n, self.impact_records)
         return _first_impact_summary(self)
 
-    @cached_property
+    @property
     def summary(self) -> dict[str, Any]:
-        """The run (for a run to separation, its first impact), computed on first use and kept."""
-        if self._to_separation():
-            return self.first_impact
+        """The run (for a run to separation, its first impact: the same dict), computed on first
+        use and kept."""
+        return self.first_impact if self._to_separation() else self._whole_run
+
+    @cached_property
+    def _whole_run(self) -> dict[str, Any]:
+        """The summary of a run to a time (or of a failed run)."""
         return _run_summary(self) if self.tallied is None else _from_tally(self.tallied[0], self.n, self.impact_records)
 
     @property
