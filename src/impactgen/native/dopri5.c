@@ -105,7 +105,8 @@ int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn,
 {
     memset(r, 0, sizeof *r);
     if (n < 1 || max_events < 0 || !rhs_fn || (max_events > 0 && !events)) return -1;
-    const size_t n_vectors = IG_DOPRI5_STAGES + 5 + 7;  /* k, cont, atol, y, y1, y6, tmp, ymid, tested */
+    /* k, kept (2..6), cont, atol, y, y1, y6, tmp, ymid, y_old, f_old, tested */
+    const size_t n_vectors = IG_DOPRI5_STAGES + 5 + 5 + 9;
     const size_t n_event_arrays = 8;                      /* g, side, g_end, g_lo, g_hi, g_now, t_root, directions */
     double *memory = (double *)malloc(sizeof(double) * (n_vectors * (size_t)n + n_event_arrays * (size_t)(max_events + 1)));
     if (!memory) return -1;
@@ -116,9 +117,10 @@ int ig_dopri5_init(ig_dopri5 *r, int n, int max_events, ig_dopri5_rhs_fn rhs_fn,
     r->events = events;
     r->user = user;
     double *next = memory;
-    double **vectors[] = {&r->atol, &r->y, &r->y1, &r->y6, &r->tmp, &r->ymid};
+    double **vectors[] = {&r->atol, &r->y, &r->y1, &r->y6, &r->tmp, &r->ymid, &r->y_old, &r->f_old};
     double **event_arrays[] = {&r->g, &r->side, &r->g_end, &r->g_lo, &r->g_hi, &r->g_now, &r->t_root};
     for (int s = 0; s < IG_DOPRI5_STAGES; ++s, next += n) r->k[s] = next;
+    for (int s = 2; s < IG_DOPRI5_STAGES; ++s, next += n) r->kept[s] = next;
     for (int s = 0; s < 5; ++s, next += n) r->cont[s] = next;
     for (size_t v = 0; v < sizeof vectors / sizeof *vectors; ++v, next += n) *vectors[v] = next;
     r->tested = (int *)next;  /* n ints fit in n doubles */
@@ -179,6 +181,7 @@ int ig_dopri5_start(ig_dopri5 *r, double t0, const double *y0, double t_stop, do
     r->h_old = 0.0;
     memcpy(r->cont[0], r->y, sizeof(double) * (size_t)n);
     for (int s = 1; s < 5; ++s) memset(r->cont[s], 0, sizeof(double) * (size_t)n);
+    r->extension_made = 1;
     r->started = 1;
     return 0;
 }
@@ -238,23 +241,37 @@ static double stiffness_estimate(const ig_dopri5 *r, double h, const double *y1,
     return den > 0.0 ? h * sqrt(num / den) : 0.0;
 }
 
-/* The continuous extension of the step just accepted (y still the old state). */
-static void keep_extension(ig_dopri5 *r, double h, const double *y1)
+/* The last step's continuous extension, if not made yet, from what the step kept: its start
+ * y_old, f there, its stages and its end r->y (each accepted step keeps them, and makes this
+ * only when asked: about 4 % of the instructions of the paper's impact went into extensions
+ * that nothing read). */
+static void make_extension(ig_dopri5 *r)
 {
-    double *const *k = r->k, *const *cont = r->cont;
+    if (r->extension_made) return;
+    const double h = r->h_old, *y0 = r->y_old, *y1 = r->y, *f0 = r->f_old;
+    double *const *k = r->kept, *const *cont = r->cont;
     for (int i = 0; i < r->n; ++i) {
-        const double ydiff = y1[i] - r->y[i];
-        const double bspl = h * k[0][i] - ydiff;
-        cont[0][i] = r->y[i];
+        const double ydiff = y1[i] - y0[i];
+        const double bspl = h * f0[i] - ydiff;
+        cont[0][i] = y0[i];
         cont[1][i] = ydiff;
         cont[2][i] = bspl;
         cont[3][i] = ydiff - h * k[6][i] - bspl;
-        cont[4][i] = h * (d1 * k[0][i] + d3 * k[2][i] + d4 * k[3][i] + d5 * k[4][i] + d6 * k[5][i] + d7 * k[6][i]);
+        cont[4][i] = h * (d1 * f0[i] + d3 * k[2][i] + d4 * k[3][i] + d5 * k[4][i] + d6 * k[5][i] + d7 * k[6][i]);
     }
+    r->extension_made = 1;
 }
 
-void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
+static void swap_vectors(double **a, double **b)
 {
+    double *const kept = *a;
+    *a = *b;
+    *b = kept;
+}
+
+void ig_dopri5_interpolate(ig_dopri5 *r, double t, double *y)
+{
+    make_extension(r);
     const double s = r->h_old != 0.0 ? (t - r->t_old) / r->h_old : 0.0, s1 = 1.0 - s;
     double *const *cont = r->cont;
     for (int i = 0; i < r->n; ++i) {
@@ -262,8 +279,9 @@ void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y)
     }
 }
 
-void ig_dopri5_taylor(const ig_dopri5 *r, double *rows)
+void ig_dopri5_taylor(ig_dopri5 *r, double *rows)
 {
+    make_extension(r);
     /* the extension in powers of s = (t - t_old) / h_old, shifted to the s of r->t */
     const int n = r->n;
     const double s0 = r->h_old != 0.0 ? (r->t - r->t_old) / r->h_old : 0.0;
@@ -401,12 +419,17 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
         const double fac = larger(1.0 / FAC_MAX, smaller(1.0 / FAC_MIN, exp(expo * log_err - BETA * r->log_fac_old) / SAFE));
         double h_new = h / fac;
         r->log_fac_old = larger(log_err, log(ERR_FLOOR));
-        keep_extension(r, h, y1);
         r->t_old = r->t;
         r->h_old = h;
         r->t = last ? r->t_stop : r->t + h;
+        /* the step keeps what its extension is made from (make_extension): its start and f there
+         * set aside, its stages swapped for the other bank, which the next attempts write */
+        swap_vectors(&r->y_old, &r->y);
         memcpy(r->y, y1, sizeof(double) * (size_t)n);
+        swap_vectors(&r->f_old, &r->k[0]);
         memcpy(r->k[0], r->k[6], sizeof(double) * (size_t)n);  /* first same as last */
+        for (int s = 2; s < IG_DOPRI5_STAGES; ++s) swap_vectors(&r->kept[s], &r->k[s]);
+        r->extension_made = 0;
         if (r->rejected) h_new = smaller(h_new, h);
         const int unstable = r->h_lambda > IG_DOPRI5_STABILITY || r->rejected;
         r->h = last ? larger(h_new, r->h) : h_new;  /* a step cut to t_stop proposes what it was cut from */

@@ -63,7 +63,10 @@ typedef struct {
     double t_old, h_old;          /* the last step: [t_old, t_old + h_old] */
     double *y;                    /* n entries */
     double *k[IG_DOPRI5_STAGES];  /* stages; k[0] is f(t, y) (first same as last) */
-    double *cont[5];              /* continuous extension of the last step */
+    double *cont[5];              /* continuous extension of the last step, made when first asked for */
+    int extension_made;           /* cont holds the last step's extension (else made from the inputs below) */
+    double *y_old, *f_old;        /* the last step's start and f there ... */
+    double *kept[IG_DOPRI5_STAGES]; /* ... and its stages 2 to 6 (kept[2..6]; the next attempts write k[2..6]) */
     double *y1, *y6, *tmp, *ymid; /* work vectors of a step and of root finding */
     double log_fac_old;           /* the PI controller's memory: the log of the last accepted error */
     int rejected;                 /* the step before was rejected */
@@ -101,10 +104,12 @@ int ig_dopri5_start(ig_dopri5 *r, double t0, const double *y0, double t_stop, do
  * attempt, with never IG_DOPRI5_SMOOTH_STEPS ordinary steps in a row between them: the
  * steps are held by stability, not accuracy, and an implicit method takes far fewer. */
 int ig_dopri5_step(ig_dopri5 *r, int *roots_found);
-/* y at t within the last step, from its continuous extension. */
-void ig_dopri5_interpolate(const ig_dopri5 *r, double t, double *y);
+/* y at t within the last step, from its continuous extension. Not const: the extension is made
+ * when first asked for after a step (most steps of an impact need none: only the event checks
+ * inside a step, root finding and dense output read it). */
+void ig_dopri5_interpolate(ig_dopri5 *r, double t, double *y);
 /* The last step's continuous extension as Taylor coefficients at r->t:
  * rows[j * n + i] = y_i^(j)(r->t) / j!, j < IG_DOPRI5_DENSE_TERMS. */
-void ig_dopri5_taylor(const ig_dopri5 *r, double *rows);
+void ig_dopri5_taylor(ig_dopri5 *r, double *rows);
 
 #endif /* IMPACTGEN_DOPRI5_H */
