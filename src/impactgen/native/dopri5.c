@@ -242,9 +242,9 @@ static double stiffness_estimate(const ig_dopri5 *r, double h, const double *y1,
 }
 
 /* The last step's continuous extension, if not made yet, from what the step kept: its start
- * y_old, f there, its stages and its end r->y (each accepted step keeps them, and makes this
- * only when asked: about 4 % of the instructions of the paper's impact went into extensions
- * that nothing read). */
+ * y_old, f there, its stages and its end r->y. Made only when asked for: on the paper's impact
+ * 3 of 59 steps need it (their roots), and making it at every step was 3 % of the run's C
+ * instructions (16k of 485k, callgrind). */
 static void make_extension(ig_dopri5 *r)
 {
     if (r->extension_made) return;
