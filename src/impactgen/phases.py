@@ -65,7 +65,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                          key=lambda impact: impact.t_start)
     status, message = _status(lib, scene, machine, ran, impacts)
 
-    trajectory = partial(_trajectory, ran, state0, m.state, session.output_index)
+    trajectory = partial(_trajectory, ran, state0, m.state, session.output_index, model.state_names)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
@@ -76,17 +76,18 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     if status != "failed":  # a failed integrator is not handed to the next run
         session.close()
     stats = partial(_stats, session.stats_names, counters, len(ran.segments), len(ran.t), time.perf_counter() - started)
-    sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names)) if sampler else None
+    sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names), model.state_names) if sampler else None
     contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
     spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries)
 
 
-def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int]) -> Trajectory:
+def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int],
+                state_names: tuple[str, ...]) -> Trajectory:
     """The samples of a run (made when first asked for: a summary needs none)."""
     return Trajectory(ran.t, ran.y, _phase_labels(ran.segments, len(ran.t), state0, state_end),
-                      Columns(output_index, ran.outputs))
+                      Columns(output_index, ran.outputs), state_names)
 
 
 def _runs(segments: list[Segment], n_samples: int, state0: int, state_end: int) -> tuple[list[int], list[int]]:
@@ -203,7 +204,7 @@ def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first
     rate0 = 0.0 if along else first[model.output_names.index("delta_rate")]
     motion = "along" if along else "away from"
     trajectory = Trajectory(np.array([0.0]), y[None, :], np.array(["free"]),
-                            {name: np.array([v]) for name, v in zip(model.output_names, first)})
+                            {name: np.array([v]) for name, v in zip(model.output_names, first)}, model.state_names)
     return SimulationResult(scene, "c", "no-impact",
                             f"the tip touches the surface but moves {motion} it (d(delta)/dt = "
                             f"{rate0:.3g} m/s): no impact", Ready(trajectory), Ready([]), [],

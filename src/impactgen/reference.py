@@ -200,6 +200,14 @@ class ReferenceModel:
     n: int
     friction_state: bool  # the state carries W_friction
 
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """The columns of the state as `rhs` lays them out (the C model's, build.CompiledModel's)."""
+        n = self.n
+        integrated = (("W_normal", "W_friction", "P_normal", "P_friction") if self.friction_state
+                      else ("W_normal", "P_normal"))  # the works, then the impulses
+        return (*(f"q{i + 1}" for i in range(n)), *(f"u{i + 1}" for i in range(n)), *integrated)
+
     @classmethod
     def from_scene(cls, scene: Scene) -> "ReferenceModel":
         y_s = scene.surface_height
@@ -444,8 +452,8 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     n = scene.n
     rtol = scene.solver.rtol if rtol is None else rtol
     atol_q = scene.solver.atol if atol is None else atol
-    n_works = 2 if model.friction_state else 1
-    nstate = 2 * n + 2 * n_works  # q, u, the works, the impulses
+    state_names = model.state_names
+    nstate = len(state_names)  # q, u, the works, the impulses
     energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
     atol_vec = np.full(nstate, atol_q)
     atol_vec[2 * n:] = atol_q * energy_scale
@@ -464,7 +472,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     if touching and rate0 <= 0 and scene.solver.t_end is None:  # touching, not approaching
         rec = _Recorder()
         rec.add(model, np.array([0.0]), y[None, :], "free")
-        trajectory = Trajectory(rec.t[0], rec.y[0], rec.phase[0], rec.outputs[0])
+        trajectory = Trajectory(rec.t[0], rec.y[0], rec.phase[0], rec.outputs[0], state_names)
         return SimulationResult(scene, engine, "no-impact", "the tip touches the surface but does not "
                                 f"approach it (d(delta)/dt = {rate0:.3g} m/s): no impact", Ready(trajectory),
                                 Ready([]), [], Ready({"nsteps": 0, "nfev": 0, "njev": 0, "segments": 0, "samples": 1}))
@@ -558,10 +566,11 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
         status, message = "failed", str(error)
 
     outputs = {k: np.concatenate([o[k] for o in rec.outputs]) for k in rec.outputs[0]}
-    trajectory = Trajectory(np.concatenate(rec.t), np.concatenate(rec.y), np.concatenate(rec.phase), outputs)
+    trajectory = Trajectory(np.concatenate(rec.t), np.concatenate(rec.y), np.concatenate(rec.phase), outputs,
+                            state_names)
     stats.update(segments=len(spans), samples=rec.count, wall_s=time.perf_counter() - started,
                  method=method)
-    sampled = Trajectory(*sampler.gathered(nstate, list(outputs))) if sampler else None
+    sampled = Trajectory(*sampler.gathered(nstate, list(outputs)), state_names) if sampler else None
     sol = DenseSolution(breaks, pieces, nstate) if dense_output else None
     return SimulationResult(scene, engine, status, message, Ready(trajectory), Ready(spans), impacts, Ready(stats),
                             sampled, sol)

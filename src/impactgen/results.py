@@ -132,15 +132,9 @@ IMPACT_UNITS = {"point": "", "t_start": "s", "t_end": "s", "duration": "s", "del
                 "W_friction": "J", "W_gravity": "J", **COEFFICIENT_UNITS}
 
 
-def integral_names(nstate: int, n: int) -> tuple[str, ...]:
-    """The states after q and u: the works W_normal[, W_friction], then the impulses
-    P_normal[, P_friction] (with friction there are four, without two)."""
-    return ("W_normal", "W_friction", "P_normal", "P_friction") if nstate - 2 * n == 4 else ("W_normal", "P_normal")
-
-
 def impact_coefficients(begin, at_max, end, v_n0: float, v_n1: float) -> dict[str, float]:
     """The impulses and coefficients (COEFFICIENTS) of an impact from its integrated states
-    (dicts of integral_names: the works and the impulses) at its start, at its maximum
+    (dicts by state name, `Trajectory.states_at`: the works and the impulses) at its start, at its maximum
     compression and at its end, and the normal speed at its start and end. The C engine
     tallies the same arithmetic (tally.c, summarize_coefficients)."""
     W_c, W_r = at_max["W_normal"] - begin["W_normal"], end["W_normal"] - at_max["W_normal"]
@@ -158,9 +152,22 @@ class Trajectory:
     """Samples at every accepted integrator step and at every switch (or at t_eval)."""
 
     t: np.ndarray  # (N,)
-    y: np.ndarray  # (N, nstate): q, u, the works W_normal[, W_friction], the impulses P_normal[, P_friction]
+    y: np.ndarray  # (N, nstate): the states, in the columns `state_names` names
     phase: np.ndarray  # (N,) phase name of the step that ended at each sample
     outputs: Mapping[str, np.ndarray]  # x_B, y_B, v_Bx, v_By, delta, delta_rate, F, F_f, T1.., T, V
+    # The columns of y by name, as the engine laid them out (the C model's own list,
+    # build.CompiledModel.state_names): q1.., u1.., then the integrated states, the works
+    # W_normal[, W_friction] and the impulses P_normal[, P_friction]. Read by name, never by
+    # a count, so a model with other integrated states (one work per contact point) reads right.
+    state_names: tuple[str, ...]
+
+    def states_at(self, i: int) -> dict[str, float]:
+        """The states at sample i by name."""
+        return dict(zip(self.state_names, self.y[i].tolist()))
+
+    def column(self, name: str) -> np.ndarray | None:
+        """State `name` at every sample, or None if this model has no such state."""
+        return self.y[:, self.state_names.index(name)] if name in self.state_names else None
 
 
 class Columns(Mapping):
@@ -257,7 +264,7 @@ class TallyRecords:
         if made is None:
             record = self._layout.record
             values = record.unpack_from(self._raw, k * record.size)
-            made = self._made[k] = Tallied(*values[:_Y_FINAL], values[_Y_FINAL:])
+            made = self._made[k] = Tallied._make(values[:_Y_FINAL] + (values[_Y_FINAL:],))
         return made
 
     def __len__(self) -> int:
@@ -362,7 +369,7 @@ class SimulationResult:
     def impacts(self) -> list[Impact]:
         """The impacts, their energies read from the samples on first use (the summaries and
         the warnings need none of them: a sweep never reads them)."""
-        _fill_impact_energies(self.trajectory, self.n, self.impact_records)
+        _fill_impact_energies(self.trajectory, self.impact_records)
         return self.impact_records
 
     @cached_property
@@ -372,11 +379,15 @@ class SimulationResult:
             return _from_tally(self.tallied[1], self.n, self.impact_records)
         return _first_impact_summary(self)
 
-    @cached_property
+    @property
     def summary(self) -> dict[str, Any]:
-        """The run (for a run to separation, its first impact), computed on first use and kept."""
-        if self._to_separation():
-            return self.first_impact
+        """The run (for a run to separation, its first impact: the same dict), computed on first
+        use and kept."""
+        return self.first_impact if self._to_separation() else self._whole_run
+
+    @cached_property
+    def _whole_run(self) -> dict[str, Any]:
+        """The summary of a run to a time (or of a failed run)."""
         return _run_summary(self) if self.tallied is None else _from_tally(self.tallied[0], self.n, self.impact_records)
 
     @property
@@ -430,9 +441,7 @@ class SimulationResult:
 
     @property
     def state_names(self) -> list[str]:
-        n = self.n
-        return ([f"q{i + 1}" for i in range(n)] + [f"u{i + 1}" for i in range(n)]
-                + list(integral_names(self._shown.y.shape[1], n)))
+        return list(self._shown.state_names)
 
     @property
     def phase(self) -> np.ndarray:
@@ -469,12 +478,13 @@ class SimulationResult:
 
     @property
     def W_normal(self) -> np.ndarray:
-        return self.y[2 * self.n]
+        return self._shown.column("W_normal")
 
     @property
     def W_friction(self) -> np.ndarray:
-        y = self.y
-        return y[2 * self.n + 1] if y.shape[0] - 2 * self.n == 4 else np.zeros(y.shape[1])
+        """Zero where the model has no friction work."""
+        W_f = self._shown.column("W_friction")
+        return W_f if W_f is not None else np.zeros_like(self.t)
 
     @cached_property
     def warnings(self) -> list[str]:
@@ -535,32 +545,30 @@ class SimulationResult:
         })
 
 
-def _fill_impact_energies(traj: Trajectory, n: int, impacts: list[Impact]) -> None:
+def _fill_impact_energies(traj: Trajectory, impacts: list[Impact]) -> None:
     """Kinetic energy before and after each impact, and the works over it, from the samples."""
     last = len(traj.t) - 1
     for impact in impacts:
         i0 = impact.i_start
         i1 = impact.i_end if impact.i_end is not None else last
-        impact.T_before, impact.T_after, works = _budget(traj, n, i0, i1)
+        impact.T_before, impact.T_after, works = _budget(traj, i0, i1)
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
         v_n = traj.outputs["v_By"]
         impact.v_n0 = float(v_n[i0])  # the rest once it has ended (as the C engine tallies them)
         if impact.i_end is not None and impact.i_max is not None:
-            names = integral_names(traj.y.shape[1], n)
-            begin, at_max, end = ({k: v for k, v in zip(names, traj.y[i, 2 * n:].tolist())}
-                                  for i in (i0, impact.i_max, i1))
+            begin, at_max, end = (traj.states_at(i) for i in (i0, impact.i_max, i1))
             for name, value in impact_coefficients(begin, at_max, end, float(v_n[i0]), float(v_n[i1])).items():
                 setattr(impact, name, value)
 
 
-def _budget(traj: Trajectory, n: int, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:
+def _budget(traj: Trajectory, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:
     """Kinetic energy at samples i0 and i1, and the energy budget between them."""
-    T, V, y = traj.outputs["T"], traj.outputs["V"], traj.y
+    T, V = traj.outputs["T"], traj.outputs["V"]
     T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
-    w0, w1 = y[i0, 2 * n:].tolist(), y[i1, 2 * n:].tolist()  # W_normal[, W_friction], the impulses at both ends
-    friction = len(w0) == 4
-    return T0, Tf, energy_balance(T0, Tf, w1[0] - w0[0], w1[1] - w0[1] if friction else 0.0, W_g)
+    s0, s1 = traj.states_at(i0), traj.states_at(i1)
+    return T0, Tf, energy_balance(T0, Tf, s1["W_normal"] - s0["W_normal"],
+                                  s1.get("W_friction", 0.0) - s0.get("W_friction", 0.0), W_g)
 
 
 def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
@@ -595,7 +603,7 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
     """Samples i0 to i1 and the impacts in them; the switches are the first impact's.
     `budget`: what `_budget` gives for the two samples, if already known."""
     traj, n = result.trajectory, result.n
-    T0, Tf, energy = _budget(traj, n, i0, i1) if budget is None else budget
+    T0, Tf, energy = _budget(traj, i0, i1) if budget is None else budget
     t_last = float(traj.t[i1])
     first = impacts[0] if impacts else None
     deepest = max(impacts, key=_dent) if len(impacts) > 1 else first

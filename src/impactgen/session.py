@@ -165,7 +165,7 @@ class CvodeSession:
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
         self.y0 = np.empty(model.nstate)
-        self.works_at_start = (0.0,) * (model.nstate - 2 * model.spec.links)  # W_normal[, W_friction]
+        self.works_at_start = (0.0,) * (model.nstate - 2 * model.spec.links)  # the integrated states: works, impulses
         self.y0_c = ffi.from_buffer("double[]", self.y0)
         self.output_index = {name: k for k, name in enumerate(model.output_names)}
         self._stats = ffi.new("ig_stats *")

@@ -82,7 +82,7 @@ static int step(ig_stepper *st, double *t, double *y, int *roots_found)
 
 static int interpolate(ig_stepper *st, double t, double *y)
 {
-    const pair_stepper *p = (const pair_stepper *)st;
+    pair_stepper *p = (pair_stepper *)st;
     if (t < p->r.t_old - 1e-12 * fabs(t) || t > p->r.t + 1e-12 * fabs(t)) return -1;
     ig_dopri5_interpolate(&p->r, t, y);
     return 0;
@@ -90,7 +90,7 @@ static int interpolate(ig_stepper *st, double t, double *y)
 
 static int dense(ig_stepper *st, double t, double *rows, int terms)
 {
-    const pair_stepper *p = (const pair_stepper *)st;
+    pair_stepper *p = (pair_stepper *)st;
     const int n = st->problem->n;
     (void)t;  /* the pair's polynomial is expanded at the step's end, r.t */
     if (terms < IG_DOPRI5_DENSE_TERMS) return -1;
