@@ -407,18 +407,20 @@ static void impact_scales(const model_params *p, double R, double v_x, double v_
 
 /* A new impact at (t, y), whose outputs under the force law so far are `out`. */
 static void impact_begins(model_machine *m, model_params *p, double t, const double *y,
-                          const double *out)
+                          const double *out, int into_dent)
 {
     m->impacts += 1;
     m->t_prev_start = m->t_start;
     m->t_prev_end = m->t_end;
     m->t_start = t;
     m->t_end = NAN;
-    m->delta_max = m->P_max = m->delta_r = 0.0;
-    m->R_res = p->R;
-    p->delta_m = 0.0;
-    p->delta_r = 0.0;
-    p->R_res = p->R;
+    if (!into_dent) {  /* a new impact on the undeformed surface (back into its own dent: its law kept) */
+        m->delta_max = m->P_max = m->delta_r = 0.0;
+        m->R_res = p->R;
+        p->delta_m = 0.0;
+        p->delta_r = 0.0;
+        p->R_res = p->R;
+    }
     const double v_Bx = out[MODEL_OUT_v_Bx], v_By = out[MODEL_OUT_v_By];
     impact_scales(p, p->R, v_Bx, v_By, fmax(out[MODEL_OUT_delta_rate], 0.0), out[MODEL_OUT_T], y, m->scale);
 }
@@ -454,7 +456,7 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
      * free flight's d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in
      * (to the first separation, such a start is no impact: MODEL_START_ALONG) */
     if (touching && (rate > 0.0 || (run_to_time && pulled_in(p, t, y, out)))) {
-        impact_begins(m, p, t, y, out);
+        impact_begins(m, p, t, y, out, 0);
         m->state = MODEL_MACHINE_ELASTIC;
         p->phase = law_of(m->state);
         return MODEL_START_CONTACT;
@@ -473,8 +475,8 @@ static int watch_state(int state, int base, int *events, int *directions)
     case MODEL_MACHINE_FREE:
         WATCH(MODEL_EVENT_CONTACT, RISING);
         /* a point that separated inside its dent (delta = delta_r > 0) and comes back down
-         * before it has left the surface never sees delta rise through 0: its return to
-         * delta_r is the new impact (MODEL section 4: a later contact is a new impact) */
+         * before it has left the surface never sees delta rise through 0: at its return to
+         * delta_r it reloads along its restitution curve, a new impact in the same dent */
         WATCH(MODEL_EVENT_SEPARATION, RISING);
         break;
     case MODEL_MACHINE_ELASTIC:
@@ -511,8 +513,8 @@ static int next_state(int state, const int *has, const model_params *p)
 {
     (void)p;
     switch (state) {
-    case MODEL_MACHINE_FREE:
-        return MODEL_MACHINE_ELASTIC;
+    case MODEL_MACHINE_FREE:  /* a new impact, or back into its own dent (delta_r), reloading */
+        return has[MODEL_EVENT_CONTACT] || !(p->delta_r > 0.0) ? MODEL_MACHINE_ELASTIC : MODEL_MACHINE_RELOADING;
     case MODEL_MACHINE_ELASTIC:
     case MODEL_MACHINE_ELASTOPLASTIC:
         return has[MODEL_EVENT_MAX_COMPRESSION] ? MODEL_MACHINE_RESTITUTION : MODEL_MACHINE_ELASTOPLASTIC;
@@ -558,8 +560,8 @@ static int tip_switch(model_machine *m, model_params *p, double t, const double 
     const int state = m->state;
     int act = MODEL_ACT_RESTART;
     int next = next_state(state, has, p);
-    if (next == MODEL_MACHINE_ELASTIC && state == MODEL_MACHINE_FREE) {
-        impact_begins(m, p, t, y, out);
+    if (state == MODEL_MACHINE_FREE) {
+        impact_begins(m, p, t, y, out, next == MODEL_MACHINE_RELOADING);
         act |= MODEL_ACT_IMPACT_BEGIN | MODEL_ACT_TOLERANCES;
     } else if (next == MODEL_MACHINE_RESTITUTION &&
                (state == MODEL_MACHINE_ELASTIC || state == MODEL_MACHINE_ELASTOPLASTIC)) {
@@ -661,5 +663,20 @@ int model_machine_below(const model_params *p, const double *y, double *depth)
         }
     }
     *depth = 0.0;
+    return 0;
+}
+
+/* ---- the joints pruned from this model (docs/embedding.md) ---- */
+int model_pruned_reach(const model_params *p, const double *y)
+{
+    /* the surface below the pivot (at height 0): the scene's, or the tip's height in y */
+    const double tip = p->L1 * sin(y[0]) + p->L2 * sin(y[1]) + p->L3 * sin(y[2]);
+    const double y_s = p->surface_initial != 0.0 ? tip : p->surface_height;
+    const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
+    double reach = 0.0;  /* joint j can reach the surface iff L1 + ... + Lj >= -y_s */
+    reach += p->L1;
+    if (reach >= -y_s - slack) return 1;
+    reach += p->L2;
+    if (reach >= -y_s - slack) return 2;
     return 0;
 }

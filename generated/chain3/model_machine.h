@@ -159,6 +159,15 @@ const char *model_machine_state_name(int state);
  * joint, 3: the tip; model_heights' order) found deeper below the surface than
  * MODEL_FLOOR_DEPTH of the shortest link, with its depth in *depth, m; 0 when none is. */
 int model_machine_below(const model_params *p, const double *y, double *depth);
+/* Pruning. The joints this model has no contact code for, as unable to reach the surface at
+ * the scene's values: 1, 2.
+ * model_pruned_reach gives the first of them that could reach it with the values in p
+ * and the initial angles in y: joint j can iff L1 + ... + Lj >= -y_s (the pivot at height 0;
+ * y_s = surface_height, or the tip's height at y when surface_initial is set); 0 when none
+ * can: this model fits the values. A nonzero answer means the model would miss that joint's
+ * contact: generate the model again from a scene with these values (embedders refuse them,
+ * as the FMU does). */
+int model_pruned_reach(const model_params *p, const double *y);
 
 #ifdef __cplusplus
 }
