@@ -39,8 +39,8 @@ class ModelSpec:
             raise ValueError(f"unknown contact model {self.contact_model!r}")
         if self.friction_law not in FRICTION_KINDS:
             raise ValueError(f"unknown friction law {self.friction_law!r}")
-        if tuple(sorted(set(self.joints))) != tuple(self.joints) or any(
-                not 1 <= j < self.links for j in self.joints):
+        if self.joints and (list(self.joints) != sorted(set(self.joints)) or not 1 <= self.joints[0]
+                            or not self.joints[-1] < self.links):
             raise ValueError(f"joints must be distinct, increasing, between 1 and {self.links - 1}")
 
     @property

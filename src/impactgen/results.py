@@ -102,6 +102,14 @@ def tip_impacts(impacts: list[Impact]) -> list[Impact]:
     return [impact for impact in impacts if impact.point == "tip"]
 
 
+def first_tip_impact(impacts: list[Impact]) -> Impact | None:
+    """The tip's first impact, or None."""
+    for impact in impacts:
+        if impact.point == "tip":
+            return impact
+    return None
+
+
 def point_number(point: str, n: int) -> int:
     """A point's number as the C engine records it: k for "joint k", n for "tip"."""
     return n if point == "tip" else int(point.split()[-1])
@@ -632,7 +640,7 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     `_summary` computes them from the samples); the lists of the first impact's switches
     from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
     lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
-    first = next((impact for impact in impacts if impact.point == "tip"), None)  # the tally is the tip's
+    first = first_tip_impact(impacts)  # the tally is the tip's
     (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
      W_normal, W_friction, W_gravity, residual, _, _, count, joint_count, first_point, *coefficients, y) = s  # Tallied's fields
     return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
