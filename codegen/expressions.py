@@ -113,6 +113,13 @@ class ModelExpressions:
     joints: tuple[JointMotion, ...] = ()  # the joints that can touch the surface (spec.joints)
 
     @property
+    def point_works(self) -> tuple[str, ...]:
+        """The states after the impulses: each joint's own works, W_normal_J<k>[, W_friction_J<k>]
+        (W_normal and W_friction are every point's together: the budget's terms)."""
+        kinds = ("normal", "friction") if self.spec.has_friction else ("normal",)
+        return tuple(f"W_{kind}_J{jm.joint}" for jm in self.joints for kind in kinds)
+
+    @property
     def integrals(self) -> tuple[Named, ...]:
         """What is integrated beside q and u, in the state's order: the works, the impulses."""
         return self.works + self.impulses
@@ -127,7 +134,7 @@ class ModelExpressions:
     def state_names(self) -> tuple[str, ...]:
         s = self.chain.symbols
         return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works) + tuple(
-            p.name for p in self.impulses)
+            p.name for p in self.impulses) + self.point_works
 
 
 @lru_cache(maxsize=32)

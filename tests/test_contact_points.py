@@ -102,3 +102,16 @@ def test_exact_coulomb_friction_sticks_and_slips_at_the_joints_too(mu):
     held = outputs["F_J2"] > 0
     assert np.all(np.abs(outputs["F_f_J2"][held]) <= mu * outputs["F_J2"][held] * (1 + 1e-6) + 1e-9)
     assert _budget_closes(result)
+
+
+def test_each_point_has_its_own_works_and_they_add_up_to_the_budgets():
+    result = impactgen.simulate("falling-chain", record_steps=False)
+    assert result.status == "ok", result.message
+    works = result.point_works
+    assert set(works) == {"tip", "joint 1", "joint 2", "joint 3", "joint 4", "joint 5"}
+    assert all(w["W_normal"] < 0 and w["W_friction"] < 0 for w in works.values())  # each point takes energy
+    energy = result.summary["energy"]
+    for kind in ("W_normal", "W_friction"):
+        assert sum(w[kind] for w in works.values()) == pytest.approx(energy[kind], rel=1e-12)
+    assert result.summary["joint_impacts"] > 0 and result.summary["first_point"] in range(1, 7)
+    assert _budget_closes(result)

@@ -605,8 +605,8 @@ void model_machine_atol(const model_machine *m, const model_params *p, double rt
         for (int i = 0; i < 2; ++i) atol_out[i] = fmin(fmax(rtol * m->scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
         for (int i = 2; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * m->scale[i], 1e-300));
     }
-    /* the impulses follow the steps the other states set (with them in the error test, the
-     * paper's impact took 68 steps instead of 59 for the same motion) */
+    /* the impulses follow the steps the other states set (with them in
+     * the error test, the paper's impact took 68 steps instead of 59 for the same motion) */
     for (int i = MODEL_Y_P_normal; i < MODEL_NSTATE; ++i) atol_out[i] = MODEL_QUADRATURE_ATOL;
 }
 

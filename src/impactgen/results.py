@@ -489,6 +489,24 @@ class SimulationResult:
         return self._shown.column("W_normal")
 
     @property
+    def point_works(self) -> dict[str, dict[str, float]]:
+        """Each contact point's own works over the run, J: {"tip": {"W_normal": ...,
+        "W_friction": ...}, "joint 2": {...}}, the points with contact code only. They add up
+        to the run's W_normal and W_friction (the energy budget's terms)."""
+        traj = self.trajectory
+        first, last = traj.states_at(0), traj.states_at(len(traj.t) - 1)
+        tip = {"W_normal": last["W_normal"] - first["W_normal"],
+               "W_friction": last.get("W_friction", 0.0) - first.get("W_friction", 0.0)}
+        works = {}
+        for name in traj.state_names:
+            if name.startswith("W_") and "_J" in name:  # W_normal_J2: joint 2's own
+                kind, joint = name[:-len(name.split("_J")[-1]) - 2], name.split("_J")[-1]
+                point = works.setdefault(f"joint {joint}", {"W_normal": 0.0, "W_friction": 0.0})
+                point[kind] = last[name] - first[name]
+                tip[kind] -= point[kind]
+        return {"tip": tip, **works}
+
+    @property
     def W_friction(self) -> np.ndarray:
         """Zero where the model has no friction work."""
         W_f = self._shown.column("W_friction")
