@@ -14,6 +14,26 @@ PAPER = ROOT / "scenes" / "paper.toml"
 os.environ.setdefault("IMPACTGEN_CACHE_DIR", tempfile.mkdtemp(prefix="impactgen-test-cache-"))
 
 
+@pytest.fixture
+def c_driver(tmp_path):
+    """A builder of examples/c's driver for a generated model folder, with the Makefile's own
+    flags and the SUNDIALS impactgen found: it returns the driver's path."""
+    import subprocess
+
+    from impactgen.sundials import find_sundials
+
+    def build(folder: Path) -> Path:
+        flags = find_sundials().cc_args()
+        driver = tmp_path / "impact_driver"
+        made = subprocess.run(["make", "-s", "-C", str(ROOT / "examples" / "c"), f"MODEL={folder}",
+                               "SUNDIALS_CFLAGS=" + " ".join(f for f in flags if f.startswith("-I")),
+                               "SUNDIALS_LIBS=" + " ".join(f for f in flags if not f.startswith("-I")),
+                               f"OUT={driver}"], capture_output=True, text=True)
+        assert made.returncode == 0, made.stderr
+        return driver
+    return build
+
+
 @pytest.fixture(scope="session")
 def paper_scene():
     import impactgen

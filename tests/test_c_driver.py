@@ -9,30 +9,20 @@ from pathlib import Path
 import pytest
 
 import impactgen
-from impactgen.sundials import find_sundials
 
-ROOT = Path(__file__).resolve().parents[1]
 FIELDS = ("T0", "Tf", "delta_max", "delta_r", "P_max", "R_res", "t_contact")
 
 
-def build_and_run(scene_name: str, folder: Path, tmp_path: Path) -> dict[str, str]:
+def build_and_run(scene_name: str, folder: Path, c_driver) -> dict[str, str]:
     subprocess.run([sys.executable, "-m", "impactgen.cli", "generate", scene_name, "--out", str(folder)],
                    check=True, capture_output=True, text=True)
-    flags = find_sundials().cc_args()
-    cflags = " ".join(f for f in flags if f.startswith("-I"))
-    libs = " ".join(f for f in flags if not f.startswith("-I"))
-    driver = tmp_path / "impact_driver"
-    res = subprocess.run(["make", "-s", "-C", str(ROOT / "examples" / "c"), f"MODEL={folder}",
-                          f"SUNDIALS_CFLAGS={cflags}", f"SUNDIALS_LIBS={libs}", f"OUT={driver}"],
-                         capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    out = subprocess.run([str(driver)], capture_output=True, text=True, check=True).stdout
+    out = subprocess.run([str(c_driver(folder))], capture_output=True, text=True, check=True).stdout
     return dict(line.split(" ", 1) for line in out.splitlines())
 
 
 @pytest.mark.parametrize("scene_name", ["paper", "chain3-free-flight"])
-def test_c_driver_matches_impactgen_run(scene_name, tmp_path):
-    printed = build_and_run(scene_name, tmp_path / "model", tmp_path)
+def test_c_driver_matches_impactgen_run(scene_name, tmp_path, c_driver):
+    printed = build_and_run(scene_name, tmp_path / "model", c_driver)
     result = impactgen.simulate(impactgen.load_scene(scene_name))
     s = result.first_impact
     assert printed["status"] == "ok" and int(printed["impacts"]) == len(result.impacts)

@@ -20,7 +20,6 @@ import pytest
 import impactgen
 from impactgen.reference import ChainModel, Contact
 
-ROOT = Path(__file__).resolve().parents[1]
 # A 3-link chain released at rest with joint 2 1.5 cm above a surface of 10 kPa: the joint
 # lands first (near t = 0.058 s) and sinks into the soft surface beyond 1 % of the shortest
 # link (2 mm) soon after.
@@ -64,20 +63,12 @@ def test_the_cli_exits_4_naming_the_joint():
     _assert_joint_2_under_the_floor(res.stderr)
 
 
-def test_the_c_driver_reports_the_joint(tmp_path):
-    from impactgen.sundials import find_sundials
+def test_the_c_driver_reports_the_joint(tmp_path, c_driver):
     folder = tmp_path / "model"
     args = [a for s in SOFT_SET for a in ("--set", s)]
     subprocess.run([sys.executable, "-m", "impactgen.cli", "generate", "paper", "--out", str(folder), *args],
                    check=True, capture_output=True, text=True)
-    flags = find_sundials().cc_args()
-    driver = tmp_path / "impact_driver"
-    made = subprocess.run(["make", "-s", "-C", str(ROOT / "examples" / "c"), f"MODEL={folder}",
-                           "SUNDIALS_CFLAGS=" + " ".join(f for f in flags if f.startswith("-I")),
-                           "SUNDIALS_LIBS=" + " ".join(f for f in flags if not f.startswith("-I")),
-                           f"OUT={driver}"], capture_output=True, text=True)
-    assert made.returncode == 0, made.stderr
-    ran = subprocess.run([str(driver)], capture_output=True, text=True)
+    ran = subprocess.run([str(c_driver(folder))], capture_output=True, text=True)
     assert ran.returncode == 4 and "status failed" in ran.stdout
     _assert_joint_2_under_the_floor(ran.stderr)
 

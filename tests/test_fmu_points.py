@@ -22,7 +22,6 @@ fmpy = pytest.importorskip("fmpy")
 from fmpy import read_model_description, simulate_fmu  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 RTOL = 1e-10  # as tests/test_fmu.py: values within 1e-6 relative, switches within 1e-9 s
 # a 3-link chain whose second joint strikes the surface at about t = 0.126 s, between the tip's
 # impacts (joint 1 cannot reach: pruned)
@@ -241,22 +240,14 @@ def test_a_model_without_joints_refuses_a_joint_at_the_surface(tmp_path):
     assert log.errors == [] and -1e-4 < result[-1]["contact[1].delta"] < 0  # joint 1 nears the surface
 
 
-def test_the_c_driver_lists_the_impacts_by_point(tmp_path):
-    from impactgen.sundials import find_sundials
+def test_the_c_driver_lists_the_impacts_by_point(tmp_path, c_driver):
     scene = impactgen.load_scene("paper", JOINT2)
     path = tmp_path / "joint2.toml"
     path.write_text(scene.to_toml())
     folder = tmp_path / "model"
     subprocess.run([sys.executable, "-m", "impactgen.cli", "generate", str(path), "--out", str(folder)],
                    check=True, capture_output=True, text=True)
-    flags = find_sundials().cc_args()
-    driver = tmp_path / "impact_driver"
-    res = subprocess.run(["make", "-s", "-C", str(ROOT / "examples" / "c"), f"MODEL={folder}",
-                          "SUNDIALS_CFLAGS=" + " ".join(f for f in flags if f.startswith("-I")),
-                          "SUNDIALS_LIBS=" + " ".join(f for f in flags if not f.startswith("-I")),
-                          f"OUT={driver}"], capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    out = subprocess.run([str(driver)], capture_output=True, text=True, check=True).stdout
+    out = subprocess.run([str(c_driver(folder))], capture_output=True, text=True, check=True).stdout
     printed = dict(line.split(" ", 1) for line in out.splitlines())
     run = impactgen.simulate(scene)
     assert printed["status"] == "ok" and len(run.impacts) == 6
