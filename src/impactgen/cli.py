@@ -613,16 +613,17 @@ def _impacts_table(result) -> list[str]:
     head, tail = IMPACT_ROWS_SHOWN
     rows = list(enumerate(result.impacts, start=1))
     shown = rows if len(rows) <= head + tail + 1 else rows[:head] + [None] + rows[-tail:]
-    lines = [f"{'impact':>6} {'t_start (s)':>13} {'duration (us)':>14} {'delta_max (m)':>14} "
-             f"{'delta_r (m)':>12} {'P_max (N)':>10} {'T before (J)':>13} {'T after (J)':>12}"]
+    points = any(i.point != "tip" for i in result.impacts)  # several contact points: say whose
+    lines = [f"{'impact':>6}{format('point', '>9') if points else ''} {'t_start (s)':>13} {'duration (us)':>14} "
+             f"{'delta_max (m)':>14} {'delta_r (m)':>12} {'P_max (N)':>10} {'T before (J)':>13} {'T after (J)':>12}"]
     for row in shown:
         if row is None:
             lines.append(f"{'...':>6} ({len(rows) - head - tail} more)")
             continue
         k, i = row
         duration = f"{i.duration * 1e6:14.6g}" if i.duration is not None else f"{'(open)':>14}"
-        lines.append(f"{k:>6} {i.t_start:13.7g} {duration} {i.delta_max:14.4g} {i.delta_r:12.4g} "
-                     f"{i.P_max:10.4g} {i.T_before:13.6g} {i.T_after:12.6g}")
+        lines.append(f"{k:>6}{f' {i.point:>8}' if points else ''} {i.t_start:13.7g} {duration} {i.delta_max:14.4g} "
+                     f"{i.delta_r:12.4g} {i.P_max:10.4g} {i.T_before:13.6g} {i.T_after:12.6g}")
     return lines
 
 
