@@ -44,8 +44,14 @@ from .dense import DenseSolution, TimeSampler
 from .errors import SceneError, SolverError
 from .results import Impact, PhaseSpan, Ready, SimulationResult, Trajectory, impact_coefficients, integral_names
 from .scene import TOUCH_TOLERANCE, Scene
+from .validity import chattering_warning
+
+CHATTERING = "chattering"  # how chattering_warning's message begins
 
 METHODS = ("Radau", "BDF", "LSODA", "DOP853", "RK45")
+# Several stuck points: a direction of their holding forces' system weaker than this fraction
+# of its strongest is not held (ChainModel.holding_forces)
+HOLD_RCOND = 1e-8
 MAX_SEGMENTS = 100_000  # phase and stick-slip switches in one run: beyond this, stop
 
 
@@ -113,14 +119,15 @@ class ChainModel:
         together, the links carrying the other forces F and F_f (`loads`). With A the rows
         a_k = (-L_i sin q_i for i < k, 0 beyond), d(v_x)/dt = A du/dt - c = 0 with
         c_k = sum_{i<k} L_i cos(q_i) u_i^2, and du/dt = free + M^-1 A^T F_hold. Two held points
-        on one horizontal link make A M^-1 A^T singular (the split between them is not
-        determined): least squares then takes the smallest forces."""
+        on one nearly horizontal link make A M^-1 A^T nearly singular: holding both exactly
+        would take huge opposite forces for a motion of second order. Least squares with the
+        cut-off HOLD_RCOND drops that direction (the smallest forces that hold the rest)."""
         n = len(self.L)
         A = np.array([np.where(np.arange(n) < k, -self.L * np.sin(q), 0.0) for k in held])
         c = np.array([np.sum((self.L * np.cos(q) * u ** 2)[:k]) for k in held])
         free = self.accelerations(q, u, F, F_f)
         per_newton = np.linalg.solve(self.mass_matrix(q), A.T)  # du/dt per newton at each held point
-        return np.linalg.lstsq(A @ per_newton, c - A @ free, rcond=None)[0]
+        return np.linalg.lstsq(A @ per_newton, c - A @ free, rcond=HOLD_RCOND)[0]
 
     def tip(self, q: np.ndarray, u: np.ndarray) -> tuple[float, float, float, float]:
         """x_B, y_B, v_Bx, v_By (works on arrays of samples too, q of shape (n, N))."""
@@ -483,6 +490,8 @@ def _contact_events(model: ReferenceModel, phase: str, point: ContactPoint) -> d
     delta = lambda t, y: model.delta_and_rate(y, point)[0]  # noqa: E731
     rate = lambda t, y: model.delta_and_rate(y, point)[1]  # noqa: E731
     if phase == "free":
+        if c.delta_r > 0:  # a dent is kept until the point leaves it (delta < 0: "contact" then first)
+            return {"contact": _event(delta, 1), "reentry": _event(lambda t, y: delta(t, y) - c.delta_r, 1)}
         return {"contact": _event(delta, 1)}
     if phase == "elastic":
         ev = {"max_compression": _event(rate, -1)}
@@ -500,7 +509,8 @@ def _contact_events(model: ReferenceModel, phase: str, point: ContactPoint) -> d
 
 
 def _after(phase: str, event: str, contact: Contact) -> str:
-    table = {("free", "contact"): "elastic", ("elastic", "yield"): "elastoplastic",
+    table = {("free", "contact"): "elastic", ("free", "reentry"): "reloading",
+             ("elastic", "yield"): "elastoplastic",
              ("elastic", "max_compression"): "restitution",
              ("elastoplastic", "max_compression"): "restitution",
              ("restitution", "separation"): "free", ("restitution", "reloading"): "reloading",
@@ -612,6 +622,25 @@ def _slip_direction_check(model: ReferenceModel, y: np.ndarray, phase: str, t: f
         impact.stick_slip.append((t, SLIP_NAMES[old], SLIP_NAMES[c.slip]))
 
 
+def _release_overloaded(model: ReferenceModel, y: np.ndarray, t: float) -> None:
+    """Exact Coulomb with joints in contact: the stuck points are held together, so a switch
+    of one point can push another's holding force out of its cone (two points of a nearly flat
+    link hold it only by huge opposite forces). The point furthest out of its cone then slips
+    against its force, and the rest are held again, until every stuck point holds."""
+    if not model.joints_in_contact():
+        return  # the tip alone: its own cone events decide
+    while True:
+        over = [(abs(a.F_f) / (a.point.contact.mu * a.F) if a.F > 0 else math.inf, a)
+                for a in model.contact_forces(y, model.tip.phase)
+                if a.held and a.F_f != 0 and abs(a.F_f) >= a.point.contact.mu * a.F]
+        if not over:
+            return
+        _, a = max(over, key=lambda item: item[0])
+        c = a.point.contact
+        old, c.slip = c.slip, -math.copysign(1.0, a.F_f)
+        a.point.impact.stick_slip.append((t, SLIP_NAMES[old], SLIP_NAMES[c.slip]))
+
+
 def _begin_slip(model: ReferenceModel, y: np.ndarray, point: ContactPoint | None = None) -> None:
     """A contact begins slipping the way the point (the tip by default) moves (as at a stop if
     it does not); frozen friction keeps that direction to separation."""
@@ -679,6 +708,19 @@ class ReferenceResult(SimulationResult):
             else:  # the tip alone: its own values are the totals
                 impact.W_normal_point, impact.W_friction_point = impact.W_normal, impact.W_friction
         return impacts
+
+    @cached_property
+    def warnings(self) -> list[str]:
+        """As any result's; with several points, chattering is judged over each point's own
+        impacts (two points' impacts overlap in time without being a chattering sequence)."""
+        found = SimulationResult.warnings.func(self)
+        if not self.several_points:
+            return found
+        kept = [w for w in found if not w.startswith(CHATTERING)]
+        for k in range(1, self.n + 1):
+            own = [i for i in self.impact_records if i.point == k]
+            kept += [f"{point_name(k, self.n)}: {w}" for w in chattering_warning(own)]
+        return kept
 
     @property
     def point_works(self) -> dict[str, dict[str, float]]:
@@ -790,6 +832,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
             point.impact.own.update(begin=[0.0] * integrals.width, v_n0=-model.delta_and_rate(y, point)[1])
             impacts.append(point.impact)
     impacts.sort(key=lambda i: i.point)
+    _release_overloaded(model, y, t)
     rec.add(model, np.array([t]), y[None, :], tip.phase, _segment_label(model)[0])
     spans: list[PhaseSpan] = []
     stats = {"nsteps": 0, "nfev": 0, "njev": 0}
@@ -855,6 +898,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
                 if id(point) in by_point:
                     separated |= _switch(model, point, by_point[id(point)], t, y, rec.count - 1, impacts,
                                          integrals.sums)
+            _release_overloaded(model, y, t)
             if separated and scene.solver.t_end is None and not any(p.phase != "free" for p in model.points):
                 break
     except SolverError as error:
@@ -896,8 +940,13 @@ def _switch(model: ReferenceModel, point: ContactPoint, events: list[str], t: fl
     if new != "free" and phase != "free" and not slipping:
         _slip_direction_check(model, y, new, t, impact, point)
     if phase == "free":
-        c.reset()
         point.impact = PointImpact(t_start=t, i_start=sample, point=point.index, point_name=point.name)
+        if new == "reloading":  # back into its own dent before leaving it: reloads along its restitution curve
+            impact = point.impact
+            impact.delta_max, impact.P_max = c.delta_m, c.normal_force("reloading", c.delta_m)
+            impact.delta_r, impact.R_res = c.delta_r, c.R_res
+        else:
+            c.reset()
         _mark(point.impact, "begin", sums, point)
         point.impact.own["v_n0"] = -model.delta_and_rate(y, point)[1]
         impacts.append(point.impact)
