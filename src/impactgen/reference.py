@@ -475,23 +475,31 @@ def _slip_at_stop(model: ReferenceModel, y: np.ndarray, phase: str, point: Conta
     return 0.0 if abs(hold) < point.contact.mu * a.F or hold == 0 else -math.copysign(1.0, hold)
 
 
-def _phase_events(model: ReferenceModel, phase: str) -> dict[str, object]:
-    """The events of every point, the tip's first (the tip in `phase`)."""
+def _phase_events(model: ReferenceModel, phase: str, y: np.ndarray | None = None) -> dict[str, object]:
+    """The events of every point, the tip's first (the tip in `phase`), for a segment that
+    begins at state `y`."""
     events = {}
     for point in (model.tip, *model.joints):
         ph = phase if point is model.tip else point.phase
-        own = {**_contact_events(model, ph, point), **_friction_events(model, phase, point)}
+        start = model.delta_and_rate(y, point)[0] if y is not None and ph == "free" else 0.0
+        own = {**_contact_events(model, ph, point, start), **_friction_events(model, phase, point)}
         events.update({_event_name(point, name): event for name, event in own.items()})
     return events
 
 
-def _contact_events(model: ReferenceModel, phase: str, point: ContactPoint) -> dict[str, object]:
+def _contact_events(model: ReferenceModel, phase: str, point: ContactPoint, start: float = 0.0) -> dict[str, object]:
+    """The events of one point in `phase`; `start`: its penetration where a free segment begins."""
     c = point.contact
     delta = lambda t, y: model.delta_and_rate(y, point)[0]  # noqa: E731
     rate = lambda t, y: model.delta_and_rate(y, point)[1]  # noqa: E731
     if phase == "free":
-        if c.delta_r > 0:  # a dent is kept until the point leaves it (delta < 0: "contact" then first)
-            return {"contact": _event(delta, 1), "reentry": _event(lambda t, y: delta(t, y) - c.delta_r, 1)}
+        # A point that separated is still at delta_r (or a rounding inside 0): were it to turn
+        # back before leaving the surface, delta rising through 0 would never fire. "reentry"
+        # fires where it comes back to where it separated, its dent's bottom; having left the
+        # surface, it meets "contact" first (the earlier root of the two).
+        entry = max(c.delta_r, start)
+        if entry > 0:
+            return {"contact": _event(delta, 1), "reentry": _event(lambda t, y: delta(t, y) - entry, 1)}
         return {"contact": _event(delta, 1)}
     if phase == "elastic":
         ev = {"max_compression": _event(rate, -1)}
@@ -509,8 +517,9 @@ def _contact_events(model: ReferenceModel, phase: str, point: ContactPoint) -> d
 
 
 def _after(phase: str, event: str, contact: Contact) -> str:
-    table = {("free", "contact"): "elastic", ("free", "reentry"): "reloading",
-             ("elastic", "yield"): "elastoplastic",
+    if (phase, event) == ("free", "reentry"):  # into its own dent (with one), else a new impact
+        return "reloading" if contact.delta_r > 0 else "elastic"
+    table = {("free", "contact"): "elastic", ("elastic", "yield"): "elastoplastic",
              ("elastic", "max_compression"): "restitution",
              ("elastoplastic", "max_compression"): "restitution",
              ("restitution", "separation"): "free", ("restitution", "reloading"): "reloading",
@@ -850,7 +859,7 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
             y0 = np.concatenate([y, np.zeros(more)]) if more else y
             atol_seg = np.concatenate([atol_vec, np.full(more, atol_integrals)]) if more else atol_vec
             try:
-                seg = integrate(model, tip.phase, t, y0, t_final, _phase_events(model, tip.phase), method, rtol,
+                seg = integrate(model, tip.phase, t, y0, t_final, _phase_events(model, tip.phase, y), method, rtol,
                                 atol_seg, **extra)
             except SolverError as error:
                 partial = getattr(error, "partial", None)
