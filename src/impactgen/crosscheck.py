@@ -205,11 +205,14 @@ def rhs_pair(scene: Scene, phase: str, y: np.ndarray, delta_m: float) -> tuple[n
         params.delta_r = delta_r
         params.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
     params.phase = PHASE_LAWS.index(phase)
-    if len(y) != model.nstate:
-        raise ValueError(f"the state has {len(y)} entries; this model has {model.nstate}")
-    y_c = ffi.new("double[]", [float(v) for v in y])
-    ydot = ffi.new("double[]", len(y))
+    names = ref.state_names  # y is laid out as the reference's state; the C model's may have more (each
+    if len(y) != len(names):  # joint's own works), which start at 0 here and are not compared
+        raise ValueError(f"the state has {len(y)} entries; the reference engine's has {len(names)}")
+    given = dict(zip(names, (float(v) for v in y)))
+    y_c = ffi.new("double[]", [given.get(name, 0.0) for name in model.state_names])
+    ydot = ffi.new("double[]", model.nstate)
     flag = model.lib.model_rhs(0.0, y_c, ydot, params)
     if flag != 0:
         raise ArithmeticError(f"model_rhs returned {flag}")
-    return np.array(list(ydot)), ref.rhs(0.0, np.asarray(y, float), phase)
+    c = dict(zip(model.state_names, ydot))
+    return np.array([c[name] for name in names]), ref.rhs(0.0, np.asarray(y, float), phase)

@@ -580,6 +580,11 @@ def _fill_impact_energies(traj: Trajectory, impacts: list[Impact]) -> None:
         impact.T_before, impact.T_after, works = _budget(traj, i0, i1)
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
+        if impact.point != "tip":  # a joint's normal speed (C: its impulses are not integrated)
+            v_y = f"v_y_J{impact.point.split()[-1]}"
+            if v_y in traj.outputs:
+                impact.v_n0 = float(traj.outputs[v_y][i0])
+            continue
         v_n = traj.outputs["v_By"]
         impact.v_n0 = float(v_n[i0])  # the rest once it has ended (as the C engine tallies them)
         if impact.i_end is not None and impact.i_max is not None:

@@ -71,6 +71,8 @@ class Contact:
     friction: float
     friction_mode: str
     friction_eps: float
+    # contact.joint_radius as given, one per joint (n - 1); None: every joint has the tip's radius
+    joint_radius: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -108,8 +110,10 @@ class Scene:
 
     @property
     def joint_radii(self) -> tuple[float, ...]:
-        """The contact radius of each joint (1 to n - 1), m."""
-        return (self.tip_radius,) * (self.n - 1)
+        """The contact radius of every joint (the end of link k, k = 1..n-1), in m: n - 1
+        values, the tip radius where `contact.joint_radius` is not given (empty for one link)."""
+        given = self.contact.joint_radius
+        return given if given is not None else (self.tip_radius,) * (self.n - 1)
 
     def replace(self, overrides: Mapping[str, Any] | None = None, **fields: Any) -> "Scene":
         """A new scene with some values changed, checked like `load_scene`.
@@ -149,7 +153,10 @@ class Scene:
                         "height": "initial" if self.surface_height is None else self.surface_height},
             "contact": {"model": self.contact.model, "friction": self.contact.friction,
                         "friction_mode": self.contact.friction_mode,
-                        "friction_eps": self.contact.friction_eps},
+                        "friction_eps": self.contact.friction_eps,
+                        # left out when not given: the joints then follow rod.tip_radius
+                        **({} if self.contact.joint_radius is None
+                           else {"joint_radius": list(self.contact.joint_radius)})},
             "initial": {"q": list(self.q0), "u": list(self.u0)},
             "solver": {"method": s.method, "jacobian": s.jacobian_setting, "rtol": s.rtol,
                        "atol": s.atol, "t_end": "separation" if s.t_end is None else s.t_end,
@@ -207,7 +214,9 @@ def _tolerance(v: float) -> str | None:
 class Key:
     """One scene key: its expected kind, default and check."""
 
-    kind: str  # "float", "int", "str", "name", "bool", "floats" (one number or a list of n), "list"
+    # "float", "int", "str", "name", "bool", "floats" (one number or a list of n), "list",
+    # "joint_floats" (one number or a list of n - 1: one per joint)
+    kind: str
     default: Any = _MISSING
     check: Check | None = None
     choices: tuple[str, ...] = ()
@@ -240,6 +249,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
                         doc="mu, the Coulomb coefficient; 0 for a frictionless surface"),
         "friction_mode": Key("str", "regularized", choices=FRICTION_MODES),
         "friction_eps": Key("float", 1e-6, _physical("contact.friction_eps"), doc="m/s"),
+        # a joint's contact radius has the tip radius's range
+        "joint_radius": Key("joint_floats", None, _physical("rod.tip_radius"),
+                            doc="m; one number or a list of n - 1 (one per joint); default rod.tip_radius"),
     },
     "initial": {
         "q_deg": Key("list", None, doc="degrees"),
@@ -294,11 +306,11 @@ def _number(key: str, v: Any, integer: bool = False) -> float | int:
     return v
 
 
-def _numbers(key: str, v: Any, n: int) -> tuple[float, ...]:
+def _numbers(key: str, v: Any, n: int, per: str = "link") -> tuple[float, ...]:
     if not isinstance(v, list):
         raise SceneError(key, f"expected a list of {n} numbers, got {type(v).__name__} {v!r}")
     if len(v) != n:
-        raise SceneError(key, f"expected {n} values (one per link), got {len(v)}")
+        raise SceneError(key, f"expected {n} values (one per {per}), got {len(v)}")
     return tuple(_number(f"{key}[{i}]", x) for i, x in enumerate(v, start=1))
 
 
@@ -331,6 +343,10 @@ def _coerce(key: str, v: Any, spec: Key, n: int) -> Any:
         if isinstance(v, list):
             return _checked(key, _numbers(key, v, n), spec)
         return (_checked(key, _number(key, v), spec),) * n
+    if spec.kind == "joint_floats":  # one number for every joint, or a list of n - 1
+        if isinstance(v, list):
+            return _checked(key, _numbers(key, v, n - 1, "joint"), spec)
+        return (_checked(key, _number(key, v), spec),) * (n - 1)
     if spec.kind == "list":
         return _numbers(key, v, n)
     if spec.kind == "height":
@@ -375,6 +391,7 @@ def parse_override(text: str) -> tuple[str, Any]:
     return key, value
 
 
+LIST_KINDS = ("floats", "list", "joint_floats")  # the kinds of key whose elements an index names
 INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 
@@ -388,7 +405,7 @@ def split_key(dotted: str) -> tuple[str, str, int | None]:
     if section not in SCHEMA or key not in SCHEMA[section]:
         raise SceneError(dotted, f"unknown key{_closest(name)}")
     if match:
-        if SCHEMA[section][key].kind not in ("floats", "list"):
+        if SCHEMA[section][key].kind not in LIST_KINDS:
             raise SceneError(dotted, f"{name} is not a list: give it without an index")
         try:
             index = int(match["index"])
@@ -444,31 +461,37 @@ def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
             raise SceneError(section, "expected a table")
         value = plain(value)
         if index is not None:
-            value = _with_element(dotted, target, section, key, index, value)
+            value = _with_element(dotted, raw, target, section, key, index, value)
         target[key] = value
         if key in ("q", "q_deg") and section == "initial":  # one overrides the other
             target.pop("q_deg" if key == "q" else "q", None)
 
 
-def _with_element(dotted: str, target: dict[str, Any], section: str, key: str, index: int,
-                  value: Any) -> list[Any]:
-    """The list of `section.key` with element `index` (from 1) set to `value`."""
+def _with_element(dotted: str, root: dict[str, Any], target: dict[str, Any], section: str, key: str,
+                  index: int, value: Any) -> list[Any]:
+    """The list of `section.key` with element `index` (from 1) set to `value`; `root` is the
+    whole scene (the number of links, and the tip radius a joint radius defaults to)."""
     current = plain(target.get(key))
     if current is None and section == "initial" and key in ("q", "q_deg"):
         other = plain(target.get("q_deg" if key == "q" else "q"))  # the angles in the other unit
         if isinstance(other, list) and all(isinstance(v, (int, float)) for v in other):
             convert = math.radians if key == "q" else math.degrees
             current = [convert(v) for v in other]
+    joints = SCHEMA[section][key].kind == "joint_floats"  # one element per joint, not per link
+    if current is None and joints:  # not given: every joint has the tip's radius
+        current = plain(root.get("rod", {}).get("tip_radius")) if isinstance(root.get("rod"), dict) else None
     if current is None:
         raise SceneError(dotted, f"the scene does not set {section}.{key}, so it has no element {index}")
-    if not isinstance(current, list):  # one number for every link (chain.length, chain.mass)
-        links = target.get("links")
+    if not isinstance(current, list):  # one number for every link (chain.length, chain.mass) or joint
+        chain = root.get("chain")
+        links = chain.get("links") if isinstance(chain, dict) else None
         if not isinstance(links, int) or isinstance(links, bool) or links < 1:
             raise SceneError(dotted, "set chain.links before an element of a per-link list")
-        current = [current] * links
+        current = [current] * (links - 1 if joints else links)
     if index > len(current):
+        per = "joint" if joints else "link"
         raise SceneError(dotted, f"index {index} is out of range: {section}.{key} has "
-                                 f"{len(current)} elements (one per link, numbered from 1)")
+                                 f"{len(current)} elements (one per {per}, numbered from 1)")
     return [value if i == index - 1 else v for i, v in enumerate(current)]
 
 
@@ -533,7 +556,8 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     rod = Material(get("rod", "E"), get("rod", "nu"), get("rod", "yield_strength"))
     surface = Material(get("surface", "E"), get("surface", "nu"), get("surface", "yield_strength"))
     contact = Contact(get("contact", "model"), get("contact", "friction"),
-                      get("contact", "friction_mode"), get("contact", "friction_eps"))
+                      get("contact", "friction_mode"), get("contact", "friction_eps"),
+                      get("contact", "joint_radius", n))
     q_deg, q_rad = get("initial", "q_deg", n), get("initial", "q", n)
     if (q_deg is None) == (q_rad is None):
         raise SceneError("initial.q", "give exactly one of initial.q (rad) and initial.q_deg")
@@ -559,6 +583,7 @@ def _jacobian(method: str, setting: str, links: int) -> str:
 # The key whose new value re-decides other fields (the links size every list): a case that
 # changes it is read in full.
 _REREAD = {"chain.links"}
+_JOINT_RADIUS = "contact.joint_radius"  # a per-joint list: its elements are set like a link's
 _MATERIALS = {"E", "nu", "yield_strength"}  # the keys of a [rod] or [surface] Material
 # The keys `_check_physics` reads: a case that changes none of them (a speed, a friction
 # coefficient, a solver setting) keeps the base scene's verdict, which was already checked.
@@ -586,7 +611,7 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     for dotted, value in overrides.items():
         section, key, index = split_key(dotted)
         name = f"{section}.{key}" if section else key
-        if name in _REREAD or (index is not None and index > n):
+        if name in _REREAD or (index is not None and index > (n - 1 if name == _JOINT_RADIUS else n)):
             return scene_from_dict(base.to_dict(), overrides, source=base.source)
         cross_checked = cross_checked or name in _CROSS_CHECKED
         checked = _checked_value(dotted, section, key, index, value, n)
@@ -606,6 +631,15 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
                 target[:] = [convert(v) for v in checked]
             else:
                 target[index - 1] = convert(checked)
+        elif name == _JOINT_RADIUS:  # a tuple, or one element of the radii (the tip's where none were given)
+            contact = fields.get("contact", base.contact)
+            radii = list(contact.joint_radius if contact.joint_radius is not None
+                         else (fields.get("tip_radius", base.tip_radius),) * (n - 1))
+            if index is None:
+                radii[:] = checked
+            else:
+                radii[index - 1] = checked
+            fields["contact"] = _with(contact, {"joint_radius": tuple(radii)})
         elif name == "solver.jacobian":  # the setting as given: `jacobian` is resolved below
             fields["solver"] = _with(fields.get("solver", base.solver), {"jacobian_setting": checked})
         elif section in _SECTION_FIELDS and (section not in ("rod", "surface") or key in _MATERIALS):
@@ -683,8 +717,8 @@ def joint_heights(scene: Scene) -> list[float]:
 
 
 def _check_physics(scene: Scene) -> None:
-    """Checks across keys: yield below modulus; the tip may touch the surface, not be in it;
-    no other point of the chain starts below the surface."""
+    """Checks across keys: yield below modulus; every point of the chain (the joints and the
+    tip, each a contact point) may start on the surface, none in it; nor may the pivot."""
     for section, mat in (("rod", scene.rod), ("surface", scene.surface)):
         if mat.yield_strength >= mat.E:
             raise SceneError(f"{section}.yield_strength", f"must be below {section}.E (a yield "
@@ -698,14 +732,18 @@ def _check_physics(scene: Scene) -> None:
                          "lower the surface or change initial.q")
     y_s = y_tip if scene.surface_height is None else scene.surface_height
     for link, (upper, lower) in enumerate(zip(heights[:-1], heights[1:]), start=1):
-        low = min(upper, lower if link < scene.n else upper)  # the tip itself may touch
+        low = min(upper, lower)  # a straight bar is lowest at one of its ends
         if y_s - low > slack:
-            where = "its pivot end" if low == upper else "its lower end"
+            if low == upper:
+                where = "its pivot end" if link == 1 else f"its pivot end (joint {link - 1})"
+            else:
+                where = "its lower end" + (" (the tip)" if link == scene.n else f" (joint {link})")
             height = ' (surface.height = "initial" puts the surface at the tip)' \
                 if scene.surface_height is None else ""
             raise SceneError("initial.q", f"link {link} starts below the surface: {where} is at "
                              f"y = {low:.6g} m, the surface at y = {y_s:.6g} m{height}; every point "
-                             "of the chain must start on or above the surface, the tip at most touching it")
+                             "of the chain must start on or above the surface (the joints and the tip "
+                             "may touch it)")
 
 
 def _tables_copied(raw: Mapping[str, Any]) -> dict[str, Any]:
