@@ -565,7 +565,7 @@ def _crosscheck(args: argparse.Namespace) -> int:
     if not 0 < args.rtol < 1 or not args.tol > 0 or args.random < 0:
         raise SceneError("crosscheck", "--rtol must lie in (0, 1), --tol be > 0, --random >= 0")
     rng = np.random.default_rng(args.seed)
-    scenes = cc.standard_scenes(_link_range(args.links), args.rtol)
+    scenes = cc.standard_scenes(_link_range(args.links), args.rtol) + cc.points_scenes(args.rtol)
     scenes += [cc.random_scene(rng, int(rng.integers(1, 7)), f"random-{args.seed}-{i}", args.rtol)
                for i in range(args.random)]
     reports = cc.run(scenes, args.method, progress=cc.stderr_progress)

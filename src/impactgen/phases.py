@@ -21,7 +21,7 @@ from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory
+from .results import Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory, point_number
 from .scene import Scene
 from .session import CvodeSession, Machine, MachineRun, Segment
 from .validity import YieldScale
@@ -61,8 +61,9 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
     impacts = _impacts(machine, ran.segments, in_contact)
     if model.spec.joints:
+        n = model.spec.links  # in time order; at one time, joints first (as the floor net numbers the points)
         impacts = sorted(impacts + _joint_impacts(machine, ran.joint_records, joints_at_start),
-                         key=lambda impact: impact.t_start)
+                         key=lambda impact: (impact.t_start, point_number(impact.point, n)))
     status, message = _status(lib, scene, machine, ran, impacts)
 
     trajectory = partial(_trajectory, ran, state0, m.state, session.output_index, model.state_names)
