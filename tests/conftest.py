@@ -14,6 +14,20 @@ PAPER = ROOT / "scenes" / "paper.toml"
 os.environ.setdefault("IMPACTGEN_CACHE_DIR", tempfile.mkdtemp(prefix="impactgen-test-cache-"))
 
 
+def built_both_ways(base, overrides) -> list:
+    """`overrides` applied to `base` by reading the scene again in full and by `scene_with`'s
+    short way: the two scenes, or the two SceneErrors' messages (they must agree)."""
+    from impactgen.errors import SceneError
+    from impactgen.scene import scene_from_dict, scene_with
+    outcomes = []
+    for build in (lambda: scene_from_dict(base.to_dict(), overrides), lambda: scene_with(base, overrides)):
+        try:
+            outcomes.append(build())
+        except SceneError as exc:
+            outcomes.append(str(exc))
+    return outcomes
+
+
 @pytest.fixture
 def c_driver(tmp_path):
     """A builder of examples/c's driver for a generated model folder, with the Makefile's own

@@ -16,8 +16,9 @@ import impactgen
 from impactgen import reference
 from impactgen.errors import SceneError
 from impactgen.reference import ChainModel, Contact, PointImpact, ReferenceModel
-from impactgen.scene import parse_override, scene_from_dict, scene_from_text, scene_with
+from impactgen.scene import parse_override, scene_from_dict, scene_from_text
 from impactgen.validity import energy_warning
+from conftest import built_both_ways
 
 RESTING = {"initial.u": [0.0, 0.0], "solver.t_end": 0.05, "solver.sustained_contact": False}
 # the 3-link chain: its tip strikes at once, then joint 2 (near t = 0.117 s) and the tip
@@ -210,12 +211,7 @@ def test_scene_with_gives_the_scene_read_in_full_for_joint_radii():
              {"contact.joint_radius[2]": 0.002, "rod.tip_radius": 0.001}, {"contact.joint_radius[3]": 0.002},
              {"contact.joint_radius": [0.002]}, {"contact.joint_radius[1]": -1.0}]
     for overrides in cases:
-        outcomes = []
-        for build in (lambda: scene_from_dict(base.to_dict(), overrides), lambda: scene_with(base, overrides)):
-            try:
-                outcomes.append(build())
-            except SceneError as exc:
-                outcomes.append(str(exc))
+        outcomes = built_both_ways(base, overrides)
         assert outcomes[0] == outcomes[1], overrides
 
 

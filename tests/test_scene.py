@@ -9,7 +9,7 @@ import pytest
 import impactgen
 from impactgen.errors import SceneError
 from impactgen.scene import parse_override
-from conftest import PAPER
+from conftest import PAPER, built_both_ways
 
 try:
     import tomllib
@@ -116,8 +116,6 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
     give the very scene, or the very error, that reading the whole scene gives."""
     import random
 
-    from impactgen.errors import SceneError
-    from impactgen.scene import scene_from_dict, scene_with
     rng = random.Random(7)
     values = {
         "initial.u[2]": lambda: rng.uniform(-1, 1), "initial.q_deg[2]": lambda: rng.uniform(-90, 0),
@@ -138,12 +136,7 @@ def test_a_changed_scene_equals_the_scene_read_in_full():
         base = impactgen.load_scene(name)
         for _ in range(400):
             overrides = {k: values[k]() for k in rng.sample(sorted(values), rng.randint(1, 3))}
-            outcomes = []
-            for build in (lambda: scene_from_dict(base.to_dict(), overrides), lambda: scene_with(base, overrides)):
-                try:
-                    outcomes.append(build())
-                except SceneError as exc:
-                    outcomes.append(str(exc))
+            outcomes = built_both_ways(base, overrides)
             assert outcomes[0] == outcomes[1], overrides
 
 
