@@ -665,8 +665,9 @@ def format_summary(result) -> str:
         e = run["energy"]
         sustained = (f", sustained contact from t = {run['t_sustained']:.6g} s"
                      if run["t_sustained"] is not None else "")
+        joints = f" at the tip, {run['joint_impacts']} at the joints" if run["joint_impacts"] else ""
         lines += [
-            f"whole run to t = {run['t_final']:.6g} s: {run['impacts']} impacts{sustained}",
+            f"whole run to t = {run['t_final']:.6g} s: {run['impacts']} impacts{joints}{sustained}",
             "  final angles      q = [" + ", ".join(f"{v:.6g}" for v in run["q_final"]) + "] rad",
             "  final speeds      u = [" + ", ".join(f"{v:.6g}" for v in run["u_final"]) + "] rad/s",
             f"  kinetic energy    T(0) = {run['T0']:.6g} J, T(end) = {run['Tf']:.6g} J",
