@@ -93,8 +93,8 @@ def test_the_issues_three_link_chain_rests_its_joint_on_the_surface(three_links)
         assert np.max(depths[k - 1]) <= deepest * (1 + 1e-9), k
         assert deepest < 1e-3  # a contact's depth, not a fall through the surface
     # the joint's own penetration and force are among the outputs
-    assert np.max(result.outputs["delta_joint2"]) == pytest.approx(max(i.delta_max for i in joint), rel=1e-9)
-    assert np.max(result.outputs["F_joint2"]) > 0 and "delta_joint1" not in result.outputs
+    assert np.max(result.outputs["delta_J2"]) == pytest.approx(max(i.delta_max for i in joint), rel=1e-9)
+    assert np.max(result.outputs["F_J2"]) > 0 and "delta_J1" not in result.outputs
     _assert_budget_closes(result)
 
 

@@ -427,8 +427,8 @@ class ReferenceModel:
         out["T"], out["V"] = T.sum(0), V
         for p in self.joints:
             delta_k = p.contact.y_s - self.chain.point(q, u, p.index)[1]
-            out[f"delta_joint{p.index}"] = delta_k
-            out[f"F_joint{p.index}"] = np.array([p.contact.normal_force(p.phase, d) for d in delta_k])
+            out[f"delta_J{p.index}"] = delta_k
+            out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d) for d in delta_k])
         return out
 
 
