@@ -368,7 +368,6 @@ def _joints(model: ModelExpressions, t) -> dict:
             "friction_kernel": _kernel(model, [friction]) if friction else None, "events": events,
             "fields": fields, "constants": [f for f in ("R", "delta_c", "P_c", "inv_delta_c", "theta_c") if f in names],
             "outputs": [(f"{o}_J{j}", f"joint {j}: {doc}") for j in spec.joints for o, doc in POINT_OUTPUTS],
-            "point_outputs": [o.upper() for o, _ in POINT_OUTPUTS],
             "point_fields": [o for o, _ in POINT_OUTPUTS],
             "output_names": {f"{o}_J{j}" for j in spec.joints for o, _ in POINT_OUTPUTS}}
 

@@ -651,8 +651,11 @@ int model_machine_below(const model_params *p, const double *y, double *depth)
 /* ---- the joints pruned from this model (docs/embedding.md) ---- */
 int model_pruned_reach(const model_params *p, const double *y)
 {
-    /* the surface below the pivot (at height 0): the scene's, or the tip's height in y */
-    const double tip = p->L1 * sin(y[0]) + p->L2 * sin(y[1]);
+    /* the surface below the pivot (at height 0): the scene's, or the tip's height in y (the
+     * heights are above p->y_s) */
+    double h[MODEL_NPOINT];
+    model_heights(y, h, p);
+    const double tip = h[MODEL_NPOINT - 1] + p->y_s;
     const double y_s = p->surface_initial != 0.0 ? tip : p->surface_height;
     const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
     double reach = 0.0;  /* joint j can reach the surface iff L1 + ... + Lj >= -y_s */

@@ -27,7 +27,7 @@ import numpy as np
 
 from .errors import SceneError
 from .plots import PHASE_COLOURS, _pyplot
-from .results import SimulationResult
+from .results import SimulationResult, point_number
 from .scene import TOUCH_TOLERANCE, joint_heights
 
 IMPACT_SHARE = 0.5  # of the frames, shared equally by the impacts when the run also has flight
@@ -113,7 +113,7 @@ def point_phases(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     for impact in result.impacts:
         if impact.point == "tip":
             continue
-        row = phases[int(impact.point.split()[-1]) - 1]
+        row = phases[point_number(impact.point, result.n) - 1]
         end = math.inf if impact.t_end is None else impact.t_end
         changes = [(impact.t_start, "elastic")] + [(t, to) for t, _, to in impact.switches]
         for (t0, phase), (t1, _) in zip(changes, changes[1:] + [(end, "")]):

@@ -5,8 +5,6 @@ option that will be refused), and the solver settings override the scene's own.
 """
 from __future__ import annotations
 
-import math
-import operator
 import os
 from typing import Any
 
@@ -19,7 +17,7 @@ from .dense import dropped_times_warning
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import TOUCH_TOLERANCE, Scene, load_scene, with_solver
+from .scene import TOUCH_TOLERANCE, Scene, joint_heights, load_scene, with_solver
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -43,13 +41,8 @@ def reachable_joints(scene: Scene) -> tuple[int, ...]:
     """The joints (1 to n - 1) that can touch the surface: those whose distance from the
     pivot along the chain reaches the surface below it. The others get no contact code."""
     lengths = scene.chain.length
-    y_s = scene.surface_height
-    if y_s is None:  # "initial": the tip's height at the start
-        y_s = sum(map(operator.mul, lengths, map(math.sin, scene.q0)))
-    total = sum(lengths)
-    depth = -y_s - TOUCH_TOLERANCE * max(1.0, total)  # of the surface below the pivot, less the rounding
-    if total - lengths[-1] < depth:  # not even the last joint reaches (the paper's chain)
-        return ()
+    y_s = joint_heights(scene)[-1] if scene.surface_height is None else scene.surface_height  # "initial": the tip's
+    depth = -y_s - TOUCH_TOLERANCE * max(1.0, sum(lengths))  # of the surface below the pivot, less the rounding
     reach = 0.0
     joints = []
     for joint, length in enumerate(lengths[:-1], start=1):

@@ -21,7 +21,8 @@ from .codegen.spec import STATES
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory, point_number
+from .results import (Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory,
+                      point_name, point_number)
 from .scene import Scene
 from .session import CvodeSession, Machine, MachineRun, Segment
 from .validity import YieldScale
@@ -62,7 +63,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     impacts = _impacts(machine, ran.segments, in_contact)
     if model.spec.joints:
         n = model.spec.links  # in time order; at one time, joints first (as the floor net numbers the points)
-        impacts = sorted(impacts + _joint_impacts(machine, ran.joint_records, joints_at_start),
+        impacts = sorted(impacts + _joint_impacts(machine, ran.joint_records, joints_at_start, n),
                          key=lambda impact: (impact.t_start, point_number(impact.point, n)))
     status, message = _status(lib, scene, machine, ran, impacts)
 
@@ -128,13 +129,13 @@ def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) 
     return impacts
 
 
-def _joint_impacts(machine: Machine, records: list[Segment], at_start: list[int]) -> list[Impact]:
+def _joint_impacts(machine: Machine, records: list[Segment], at_start: list[int], n: int) -> list[Impact]:
     """The joints' impacts, from the records of their switches (`_impacts` per joint)."""
     impacts = []
     for joint in sorted({seg.point for seg in records} | set(at_start)):
         mine = _impacts(machine, [seg for seg in records if seg.point == joint], joint in at_start)
         for impact in mine:
-            impact.point = f"joint {joint}"
+            impact.point = point_name(joint, n)
         impacts += mine
     return impacts
 

@@ -43,7 +43,7 @@ from scipy.integrate import solve_ivp
 from .dense import DenseSolution, TimeSampler
 from .errors import SceneError, SolverError
 from .results import (Impact, PhaseSpan, Ready, SimulationResult, Trajectory, impact_coefficients,
-                      point_number)
+                      point_name, point_number)
 from .scene import TOUCH_TOLERANCE, Scene
 from .validity import chattering_warning
 
@@ -264,11 +264,6 @@ class PointForce:
     v_x: float
     v_y: float
     held: bool  # its F_f is the force that holds it still (exact Coulomb, stuck)
-
-
-def point_name(index: int, n: int) -> str:
-    """The name of point `index` (1..n) of an n-link chain, as the floor net names it."""
-    return "tip" if index == n else f"joint {index}"
 
 
 def reachable_joints(scene: Scene, y_s: float) -> list[int]:

@@ -102,12 +102,9 @@ def tip_impacts(impacts: list[Impact]) -> list[Impact]:
     return [impact for impact in impacts if impact.point == "tip"]
 
 
-def first_tip_impact(impacts: list[Impact]) -> Impact | None:
-    """The tip's first impact, or None."""
-    for impact in impacts:
-        if impact.point == "tip":
-            return impact
-    return None
+def point_name(number: int, n: int) -> str:
+    """The name of contact point `number` (1 to n) of an n-link chain: "joint k", or "tip"."""
+    return "tip" if number == n else f"joint {number}"
 
 
 def point_number(point: str, n: int) -> int:
@@ -500,8 +497,8 @@ class SimulationResult:
         works = {}
         for name in traj.state_names:
             if name.startswith("W_") and "_J" in name:  # W_normal_J2: joint 2's own
-                kind, joint = name[:-len(name.split("_J")[-1]) - 2], name.split("_J")[-1]
-                point = works.setdefault(f"joint {joint}", {"W_normal": 0.0, "W_friction": 0.0})
+                kind, joint = name.rsplit("_J", 1)
+                point = works.setdefault(point_name(int(joint), self.n), {"W_normal": 0.0, "W_friction": 0.0})
                 point[kind] = last[name] - first[name]
                 tip[kind] -= point[kind]
         return {"tip": tip, **works}
@@ -581,7 +578,7 @@ def _fill_impact_energies(traj: Trajectory, impacts: list[Impact]) -> None:
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
         if impact.point != "tip":  # a joint's normal speed (C: its impulses are not integrated)
-            v_y = f"v_y_J{impact.point.split()[-1]}"
+            v_y = f"v_y_J{point_number(impact.point, 0)}"
             if v_y in traj.outputs:
                 impact.v_n0 = float(traj.outputs[v_y][i0])
             continue
@@ -663,7 +660,8 @@ def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
     `_summary` computes them from the samples); the lists of the first impact's switches
     from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
     lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
-    first = first_tip_impact(impacts)  # the tally is the tip's
+    tips = tip_impacts(impacts)  # the tally is the tip's
+    first = tips[0] if tips else None
     (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
      W_normal, W_friction, W_gravity, residual, _, _, count, joint_count, first_point, *coefficients, y) = s  # Tallied's fields
     return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
