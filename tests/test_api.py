@@ -206,6 +206,24 @@ def test_replace_validates_like_load_scene(paper_scene):
     assert changed.solver.rtol == 1e-6 and changed.q0 == paper_scene.q0
 
 
+def test_options_run_the_scene_they_make(paper_scene):
+    """simulate(scene, rtol=..., method=...) runs without making a new scene; the result's
+    scene is the one those settings make (made when asked for), and the run is the one that
+    scene gives, bit for bit."""
+    import pickle
+
+    from impactgen.scene import with_solver
+    settings = {"rtol": 1e-7, "method": "bdf", "t_end": 2e-3}
+    result = impactgen.simulate(paper_scene, record_steps=False, **settings)
+    made = with_solver(paper_scene, settings)
+    assert result.solver == made.solver and result.solver.jacobian == "analytic"
+    assert result.scene == made and result.scene.solver is result.solver
+    assert result.summary == impactgen.simulate(made, record_steps=False).summary
+    assert pickle.loads(pickle.dumps(result)).scene == made
+    plain = impactgen.simulate(paper_scene, record_steps=False)
+    assert plain.scene is paper_scene and plain.solver is paper_scene.solver
+
+
 def test_indexed_keys_count_from_one_like_the_links():
     scene = impactgen.load_scene(PAPER, overrides={"initial.u[2]": -0.3, "chain.length[1]": 1.5})
     assert scene.u0 == (-0.1, -0.3) and scene.chain.length == (1.5, 1.0)

@@ -17,7 +17,7 @@ from .dense import dropped_times_warning
 from .errors import SceneError
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
-from .scene import TOUCH_TOLERANCE, Scene, joint_heights, load_scene, with_solver
+from .scene import TOUCH_TOLERANCE, Scene, Solver, joint_heights, load_scene, replace_solver, solver_with
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -25,9 +25,12 @@ SOLVER_OPTIONS = ("rtol", "atol", "max_steps", "t_end")  # simulate()'s keys of 
 OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "record_steps")
 
 
-def model_spec(scene: Scene) -> ModelSpec:
-    """The structure of the generated C that `scene` needs (numbers stay parameters)."""
-    contact, solver = scene.contact, scene.solver
+def model_spec(scene: Scene, solver: Solver | None = None) -> ModelSpec:
+    """The structure of the generated C that `scene` needs (numbers stay parameters), run
+    under `solver` (default: the scene's own)."""
+    contact = scene.contact
+    if solver is None:
+        solver = scene.solver
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
     joints = reachable_joints(scene)
@@ -124,24 +127,26 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
     if engine not in ENGINES:
         raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
+    solver = scene.solver
     if rtol is not None or atol is not None or max_steps is not None or t_end is not None or method is not None:
         given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
         settings = {k: v for k, v in given.items() if v is not None}
         if method is not None and engine == "c":
             settings["method"] = _c_method(method)
         if settings:  # only the values given are checked: the rest of the scene was checked already
-            scene = with_solver(scene, settings)
-    times = _checked_times(t_eval, scene) if t_eval is not None else None
+            solver = solver_with(scene, settings)
+    times = _checked_times(t_eval, solver) if t_eval is not None else None
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
         for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
                 raise SceneError(name, f"expected True or False, got {flag!r}")
     if engine == "c":
-        result = phases.run(compile_model(model_spec(scene)), scene, t_eval=times, dense_output=bool(dense_output),
-                            record_steps=bool(record_steps))
+        result = phases.run(compile_model(model_spec(scene, solver)), scene, solver, t_eval=times,
+                            dense_output=bool(dense_output), record_steps=bool(record_steps))
     else:
         from . import reference
-        result = reference.simulate(scene, _reference_method(method), t_eval=times, dense_output=bool(dense_output))
+        result = reference.simulate(replace_solver(scene, solver), _reference_method(method), t_eval=times,
+                                    dense_output=bool(dense_output))
     if times is not None and len(result.t) < len(times):  # warnings are made once, then kept
         result.warnings.extend(dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1])))
     return result
@@ -177,7 +182,7 @@ def _reference_method(method: Any) -> str:
     return names[method.lower()]
 
 
-def _checked_times(t_eval: Any, scene: Scene) -> np.ndarray:
+def _checked_times(t_eval: Any, solver: Solver) -> np.ndarray:
     """t_eval as a sorted 1-D array of finite times within the run."""
     try:
         times = np.asarray(t_eval, dtype=float)
@@ -189,9 +194,9 @@ def _checked_times(t_eval: Any, scene: Scene) -> np.ndarray:
         raise SceneError("t_eval", "times must be finite")
     if np.any(np.diff(times) < 0):
         raise SceneError("t_eval", "times must be sorted in increasing order")
-    end = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
+    end = solver.t_end if solver.t_end is not None else solver.t_max
     if times[0] < 0 or times[-1] > end * (1 + 4 * np.finfo(float).eps):
-        what = "solver.t_end" if scene.solver.t_end is not None else "solver.t_max"
+        what = "solver.t_end" if solver.t_end is not None else "solver.t_max"
         raise SceneError("t_eval", f"times must lie in [0, {what} = {end:g} s], got "
                                    f"[{times[0]:g}, {times[-1]:g}]")
     return times

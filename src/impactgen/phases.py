@@ -23,16 +23,17 @@ from .errors import SolverError
 from .model_params import fill_params
 from .results import (Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory,
                       point_name, point_number)
-from .scene import Scene
+from .scene import Scene, Solver
 from .session import CvodeSession, Machine, MachineRun, Segment
 from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
 
 
-def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
+def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval: np.ndarray | None = None,
         dense_output: bool = False, record_steps: bool = True) -> SimulationResult:
-    """Simulate `scene` with the compiled `model` from phase to phase.
+    """Simulate `scene` under `solver` (default: the scene's own) with the compiled `model`
+    from phase to phase.
 
     `t_eval` (sorted times) adds samples read from CVODE's interpolating polynomials;
     `dense_output` keeps those polynomials as `result.sol`. Without `record_steps` (and
@@ -41,19 +42,20 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     samples reached so far."""
     started = time.perf_counter()
     lib = model.lib
+    if solver is None:
+        solver = scene.solver
     params = fill_params(model, scene)
-    session = CvodeSession.open(model, scene)
+    session = CvodeSession.open(model, solver)
     machine = session.phase_machine
     m = machine.state
-    solver = scene.solver
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
-    start = session.begin(params, scene)
+    start = session.begin(params, scene, solver)
     state0 = m.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         first_row, tallied = session.without_run()
         session.close()
-        return _no_impact_at_start(scene, model, session.y0.copy(), first_row.tolist(),
+        return _no_impact_at_start(scene, solver, model, session.y0.copy(), first_row.tolist(),
                                    start == lib.MODEL_START_ALONG, started, tallied)
     in_contact = start == lib.MODEL_START_CONTACT
     joints_at_start = [model.lib.model_joint_number(k) for k in range(len(model.spec.joints))
@@ -65,7 +67,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
         n = model.spec.links  # in time order; at one time, joints first (as the floor net numbers the points)
         impacts = sorted(impacts + _joint_impacts(machine, ran.joint_records, joints_at_start, n),
                          key=lambda impact: (impact.t_start, point_number(impact.point, n)))
-    status, message = _status(lib, scene, machine, ran, impacts)
+    status, message = _status(lib, solver, machine, ran, impacts)
 
     trajectory = partial(_trajectory, ran, state0, m.state, session.output_index, model.state_names)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
@@ -82,7 +84,7 @@ def run(model: CompiledModel, scene: Scene, t_eval: np.ndarray | None = None,
     contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
     spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
-                            ran.summaries)
+                            ran.summaries, solver)
 
 
 def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int],
@@ -157,12 +159,12 @@ def _stats(names: tuple[str, ...], counters: tuple[int, ...], segments: int, sam
     return {**dict(zip(names, counters)), "segments": segments, "samples": samples, "wall_s": wall_s}
 
 
-def _status(lib, scene: Scene, machine: Machine, ran: MachineRun, impacts: list[Impact]) -> tuple[str, str]:
+def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: list[Impact]) -> tuple[str, str]:
     """Status and message of the run from how ig_run returned."""
     if ran.flag == lib.IG_RUN_DONE:
         return "ok", ""
     if ran.flag == lib.IG_REACHED_END:
-        return _end_without_event(scene, impacts, STATES[ran.segments[-1].state])
+        return _end_without_event(solver, impacts, STATES[ran.segments[-1].state])
     message = ran.message
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
@@ -191,17 +193,17 @@ def _outputs_at(session: CvodeSession, model: CompiledModel, params):
     return lambda t, y: dict(zip(model.output_names, session.outputs(params, t, y).T))
 
 
-def _end_without_event(scene: Scene, impacts: list[Impact], phase: str) -> tuple[str, str]:
+def _end_without_event(solver: Solver, impacts: list[Impact], phase: str) -> tuple[str, str]:
     """Status and message of a run that reached its end time rather than an event."""
-    if scene.solver.t_end is not None:
+    if solver.t_end is not None:
         return "ok", ""
     if not impacts:
-        return "no-impact", f"no contact within solver.t_max = {scene.solver.t_max:g} s"
-    return "ok", (f"no separation within solver.t_max = {scene.solver.t_max:g} s: the tip came to rest "
+        return "no-impact", f"no contact within solver.t_max = {solver.t_max:g} s"
+    return "ok", (f"no separation within solver.t_max = {solver.t_max:g} s: the tip came to rest "
                   f"on the surface (phase {phase!r}); the summary's impact has no end")
 
 
-def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first: list[float],
+def _no_impact_at_start(scene: Scene, solver: Solver, model: CompiledModel, y: np.ndarray, first: list[float],
                         along: bool, started: float, tallied: TallyRecords) -> SimulationResult:
     rate0 = 0.0 if along else first[model.output_names.index("delta_rate")]
     motion = "along" if along else "away from"
@@ -211,4 +213,4 @@ def _no_impact_at_start(scene: Scene, model: CompiledModel, y: np.ndarray, first
                             f"the tip touches the surface but moves {motion} it (d(delta)/dt = "
                             f"{rate0:.3g} m/s): no impact", Ready(trajectory), Ready([]), [],
                             Ready({"segments": 0, "samples": 1, "wall_s": time.perf_counter() - started}),
-                            tallied=tallied)
+                            tallied=tallied, solver=solver)

@@ -17,7 +17,7 @@ from typing import Any, Generic, NamedTuple, TypeVar
 import numpy as np
 
 from .dense import DenseSolution
-from .scene import Scene
+from .scene import Scene, Solver, replace_solver
 from .validity import YieldScale, energy_warning, frozen_friction_warning, validity_warnings
 
 Part = TypeVar("Part")
@@ -322,6 +322,10 @@ class SimulationResult:
         budget fails to close (the integrator did not resolve the motion).
     stats : dict
         Integrator counters and the wall time.
+    scene : Scene
+        The scene as simulated: the one given, with simulate()'s solver options in it.
+    solver : Solver
+        Its solver settings (``scene.solver``), read without making that scene.
 
     Examples
     --------
@@ -333,7 +337,7 @@ class SimulationResult:
     3
     """
 
-    scene: Scene
+    given_scene: Scene  # as simulate() was given it: `scene` is it under the run's `solver`
     engine: str
     status: str
     message: str
@@ -347,6 +351,19 @@ class SimulationResult:
     sol: DenseSolution | None = None
     contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
     tallied: "TallyRecords | tuple[Tallied, Tallied] | None" = None  # the C engine's summaries (run, first impact)
+    solver: Solver | None = None  # the solver settings of the run (None given: the scene's own)
+
+    def __post_init__(self) -> None:
+        if self.solver is None:
+            self.solver = self.given_scene.solver
+
+    @property
+    def scene(self) -> Scene:
+        """The scene as simulated: the one given, with simulate()'s solver options (`solver`)
+        in its [solver]. Made when first asked for: a run under options needs no new scene."""
+        if self.solver is not self.given_scene.solver:
+            self.given_scene = replace_solver(self.given_scene, self.solver)
+        return self.given_scene
 
     @cached_property
     def trajectory(self) -> Trajectory:
@@ -413,12 +430,12 @@ class SimulationResult:
         return self.tallied.raw(1 if self._to_separation() else 0), self.tallied.dtype
 
     def _to_separation(self) -> bool:
-        return self.scene.solver.t_end is None and self.status != "failed"
+        return self.solver.t_end is None and self.status != "failed"
 
     # -- solve_ivp-like views -------------------------------------------------------------
     @property
     def n(self) -> int:
-        return self.scene.n
+        return self.given_scene.n
 
     @property
     def success(self) -> bool:
@@ -525,7 +542,7 @@ class SimulationResult:
 
     def _frozen_friction_warning(self) -> list[str]:
         """friction_mode = "frozen": whether the tip's tangential speed reversed in contact."""
-        if self.scene.contact.friction_mode != "frozen":
+        if self.given_scene.contact.friction_mode != "frozen":
             return []
         traj = self.trajectory
         return frozen_friction_warning(self.scene, self.impact_records, traj.t, traj.y)
@@ -555,7 +572,7 @@ class SimulationResult:
 
     def to_json_dict(self) -> dict[str, Any]:
         return _finite({
-            "scene": self.scene.name,
+            "scene": self.given_scene.name,
             "engine": self.engine,
             "status": self.status,
             "message": self.message,

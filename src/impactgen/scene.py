@@ -670,18 +670,31 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
 
 
 def with_solver(base: Scene, settings: Mapping[str, Any]) -> Scene:
-    """`base` with some keys of its [solver] table changed (``{"rtol": 1e-8}``): each value
-    checked as the scene checks it, the Jacobian's "auto" resolved again; nothing else of
-    the scene is read, since no other key depends on the solver's."""
+    """`base` with some keys of its [solver] table changed (``{"rtol": 1e-8}``), checked as
+    `solver_with` checks them."""
+    return replace_solver(base, solver_with(base, settings))
+
+
+def solver_with(base: Scene, settings: Mapping[str, Any]) -> Solver:
+    """`base`'s solver with some keys of its [solver] table changed (``{"rtol": 1e-8}``):
+    each value checked as the scene checks it, the Jacobian's "auto" resolved again when the
+    method or the Jacobian setting changes; nothing else of the scene is read, since no other
+    key depends on the solver's. (simulate() runs a scene under it without making a new
+    scene: `replace_solver` makes one when it is asked for.)"""
     checked = {key: _checked_value(f"solver.{key}", "solver", key, None, value, base.n)
                for key, value in settings.items()}
     if "jacobian" in checked:  # the setting as given: `jacobian` is the resolved one
         checked["jacobian_setting"] = checked.pop("jacobian")
-    solver = _with(base.solver, checked)
-    jacobian = _jacobian(solver.method, solver.jacobian_setting, base.n)
-    if jacobian != solver.jacobian:
-        solver = _with(solver, {"jacobian": jacobian})
-    return _with(base, {"solver": solver})
+    solver = base.solver
+    if "method" in checked or "jacobian_setting" in checked:
+        checked["jacobian"] = _jacobian(checked.get("method", solver.method),
+                                        checked.get("jacobian_setting", solver.jacobian_setting), base.n)
+    return _with(solver, checked)
+
+
+def replace_solver(scene: Scene, solver: Solver) -> Scene:
+    """`scene` with `solver` (made by `solver_with`, so checked already) as its [solver]."""
+    return scene if solver is scene.solver else _with(scene, {"solver": solver})
 
 
 _SECTION_FIELDS = {"chain", "rod", "surface", "contact", "solver"}  # sections that are a Scene field of their name

@@ -16,7 +16,7 @@ import numpy as np
 from .build import CompiledModel
 from .errors import SolverError
 from .results import BUDGET, SummaryLayout, Tallied, TallyRecords
-from .scene import EXPLICIT_METHODS, Scene
+from .scene import EXPLICIT_METHODS, Scene, Solver
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 SEGMENT_CAPACITY = 64  # segment records per C call of a run
@@ -132,31 +132,31 @@ class CvodeSession:
     _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
 
     @classmethod
-    def open(cls, model: CompiledModel, scene: Scene) -> "CvodeSession":
-        """An idle session of this model and method, or a new one; `begin` a run on it."""
-        key = model.lib, scene.solver.method  # one library per build, hashed by identity
+    def open(cls, model: CompiledModel, solver: Solver) -> "CvodeSession":
+        """An idle session of this model and `solver`'s method, or a new one; `begin` a run on it."""
+        key = model.lib, solver.method  # one library per build, hashed by identity
         try:
             return cls._idle.get(key, []).pop()
         except IndexError:
-            return cls(model, scene, key)
+            return cls(model, solver, key)
 
     def close(self) -> None:
         """Hand the integrator back for the next run (only after a run that ended normally)."""
         self._idle.setdefault(self.pool_key, []).append(self)
 
-    def __init__(self, model: CompiledModel, scene: Scene, pool_key: tuple):
+    def __init__(self, model: CompiledModel, solver: Solver, pool_key: tuple):
         self.model = model
         self.pool_key = pool_key  # where `close` hands it back (`open` made it)
         ffi = model.ffi
-        self.method = method_code(model.lib, scene.solver.method)
-        self.analytic = 1 if uses_jacobian(model, scene) else 0
+        self.method = method_code(model.lib, solver.method)
+        self.analytic = 1 if uses_jacobian(model, solver) else 0
         self.capacity = FIRST_BUFFER
         self.dense = False  # keep each step's interpolating polynomial (dense output, t_eval)
         # the run's arguments, allocated once
         self.machine = ffi.new("model_machine *")
         self.phase_machine = Machine(model, self.machine)
         self.atol_now = ffi.new("double[]", model.nstate)
-        self.solver = self._new_solver(scene)
+        self.solver = self._new_solver(solver)
         self.dense_terms = int(model.lib.ig_dense_terms(self.solver))
         self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
         self._segment_bytes = ffi.buffer(self.segments)
@@ -179,9 +179,9 @@ class CvodeSession:
         self._summary_layout = summary_layout(ffi)
         self._alloc()
 
-    def _new_solver(self, scene: Scene):
-        """The integrator, made with the scene's tolerances (each run's `begin` resets them)."""
-        ffi, lib, solver = self.model.ffi, self.model.lib, scene.solver
+    def _new_solver(self, solver: Solver):
+        """The integrator, made with `solver`'s tolerances (each run's `begin` resets them)."""
+        ffi, lib = self.model.ffi, self.model.lib
         self.atol_now[0:self.model.nstate] = [solver.atol] * self.model.nstate
         err = ffi.new("char[]", 512)
         made = lib.ig_solver_new(self.method, self.analytic, solver.rtol, self.atol_now, solver.max_steps, err, 512)
@@ -189,13 +189,12 @@ class CvodeSession:
             raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
         return ffi.gc(made, lib.ig_solver_free)
 
-    def begin(self, params, scene: Scene) -> int:
+    def begin(self, params, scene: Scene, solver: Solver) -> int:
         """Start the machine at the scene's initial state, at t = 0, under `params` (which
         the run goes on with): sample 0 and the tally begun there, and, when an impact can
-        follow, the integrator reset with the scene's tolerances as the machine scales them
+        follow, the integrator reset with `solver`'s tolerances as the machine scales them
         (ig_run_begin). Returns the machine's MODEL_START_*."""
         self.y0_c[0:len(self.y0)] = scene.q0 + scene.u0 + self.works_at_start  # (cffi converts faster than numpy)
-        solver = scene.solver
         self.t_now[0] = 0.0
         start = self.model.lib.ig_run_begin(self.solver, self.machine, params, 0.0, self.y0_c,
                                             solver.t_end is not None, solver.rtol, solver.atol, solver.max_steps,
@@ -307,10 +306,10 @@ def method_code(lib, method: str) -> int:
     return getattr(lib, f"IG_METHOD_{method.upper()}")
 
 
-def uses_jacobian(model: CompiledModel, scene: Scene) -> bool:
+def uses_jacobian(model: CompiledModel, solver: Solver) -> bool:
     """Whether CVODE gets the model's analytic Jacobian: the model has one and the method is
     implicit (the explicit Runge-Kutta pair uses none)."""
-    return bool(model.spec.jacobian) and scene.solver.method not in EXPLICIT_METHODS
+    return bool(model.spec.jacobian) and solver.method not in EXPLICIT_METHODS
 
 
 def likely_cause(message: str) -> str:
