@@ -19,6 +19,17 @@ STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplast
              "restitution": "restitution", "reloading": "restitution", "sustained": "sustained"}
 
 
+def point_name(number: int, n: int) -> str:
+    """The name of contact point `number` (1 to n) of an n-link chain: "joint k" (the end of
+    link k), or "tip"."""
+    return "tip" if number == n else f"joint {number}"
+
+
+def point_number(point: str, n: int) -> int:
+    """A point's number as the C engine records it: k for "joint k", n for "tip"."""
+    return n if point == "tip" else int(point.split()[-1])
+
+
 @dataclass(frozen=True)
 class ModelSpec:
     """What the generated C must be able to do; two scenes with equal specs share a build."""

@@ -126,3 +126,39 @@ def test_the_engines_agree_on_several_contact_points():
     reports = crosscheck.run(crosscheck.points_scenes(1e-10))
     for report in reports:
         assert max(report.differences.values()) < 1e-7, (report.scene.name, report.differences)
+
+
+def test_each_point_is_judged_by_its_own_contact_constants():
+    """A joint's impacts are checked against the constants of its own radius (here 0.5 m:
+    its dents stay elastic, where the tip's 5 mm would have yielded), as the C model derived
+    them, and as the scene gives them."""
+    from impactgen.validity import point_constants, validity_warnings
+    scene = impactgen.load_scene("paper", {**JOINT_LANDS, "solver.t_end": 0.3, "contact.joint_radius": [0.005, 0.5]})
+    result = impactgen.simulate(scene, record_steps=False)
+    assert result.status == "ok", result.message
+    joint = point_constants(scene, "joint 2")
+    assert result.contact["joint 2"].R == 0.5
+    assert result.contact["joint 2"].delta_c == pytest.approx(joint.delta_c, rel=1e-12)
+    assert result.contact["tip"].delta_c == pytest.approx(point_constants(scene, "tip").delta_c, rel=1e-12)
+    first_joint = next(i for i in result.impacts if i.point == "joint 2")
+    assert first_joint.delta_max < joint.delta_c < first_joint.delta_max * 100  # elastic for its radius, not the tip's
+    assert any("at joint 2, the elastic limit was never reached" in w for w in result.warnings), result.warnings
+    assert validity_warnings(result.scene, result.impact_records) == result.warnings
+
+
+def test_chattering_is_judged_point_by_point():
+    """Two points' impacts overlap in time without either point chattering; one point whose
+    flights shrink is named."""
+    from impactgen.results import Impact
+    from impactgen.validity import chattering_by_point
+
+    def impact(point, t0, t1):
+        found = Impact(t0, 0, t1, 0)
+        found.point = point
+        return found
+    apart = [impact("joint 2", 0.0, 0.01), impact("tip", 0.011, 0.02), impact("joint 2", 0.5, 0.51),
+             impact("tip", 0.6, 0.61)]
+    assert chattering_by_point(sorted(apart, key=lambda i: i.t_start)) == []
+    settling = apart + [impact("tip", 0.611, 0.62)]
+    found = chattering_by_point(sorted(settling, key=lambda i: i.t_start))
+    assert len(found) == 1 and found[0].startswith("tip: chattering from impact 2 on")

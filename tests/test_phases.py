@@ -137,7 +137,7 @@ def test_results_outside_the_models_range_carry_warnings():
     assert validity_warnings(hard, result.impacts) == warnings
     laws = contact_constants(hard)
     for name in ("R", "delta_c", "B"):
-        assert getattr(result.contact, name) == pytest.approx(getattr(laws, name), rel=1e-14), name
+        assert getattr(result.contact["tip"], name) == pytest.approx(getattr(laws, name), rel=1e-14), name
 
 
 def test_chattering_impacts_carry_a_warning():

@@ -53,10 +53,12 @@ def _lambdified(name: str) -> Callable[..., float]:
     raise KeyError(name)
 
 
-def contact_constants(scene: Scene) -> ContactConstants:
-    """E*, R, S_y, nu, C_j, delta_c, P_c and B of a scene's materials (MODEL section 3)."""
+def contact_constants(scene: Scene, radius: float | None = None) -> ContactConstants:
+    """E*, R, S_y, nu, C_j, delta_c, P_c and B of a scene's materials (MODEL section 3), at
+    its tip, or at a contact point of this `radius` (a joint's)."""
     rod, flat = scene.rod, scene.surface
-    return _constants_of(rod.E, rod.nu, rod.yield_strength, scene.tip_radius, flat.E, flat.nu, flat.yield_strength)
+    return _constants_of(rod.E, rod.nu, rod.yield_strength, scene.tip_radius if radius is None else radius,
+                         flat.E, flat.nu, flat.yield_strength)
 
 
 @lru_cache(maxsize=1024)  # a sweep over angles and speeds asks for the same materials each case

@@ -81,10 +81,18 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
         session.close()
     stats = partial(_stats, session.stats_names, counters, len(ran.segments), len(ran.t), time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names), model.state_names) if sampler else None
-    contact = YieldScale(params.R, params.delta_c, params.B) if model.spec.plastic else None  # as derived in C
+    contact = _yield_scales(model, params) if model.spec.plastic else None
     spans = partial(_spans, machine, model.event_names, ran.segments)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries, solver)
+
+
+def _yield_scales(model: CompiledModel, params) -> dict[str, YieldScale]:
+    """Each contact point's constants, as the C model derived them, for the warnings."""
+    scales = {"tip": YieldScale(params.R, params.delta_c, params.B)}
+    for k, joint in enumerate(model.spec.joints):
+        scales[point_name(joint, model.spec.links)] = YieldScale(params.joint[k].R, params.joint[k].delta_c, params.B)
+    return scales
 
 
 def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int],

@@ -45,9 +45,6 @@ from .errors import SceneError, SolverError
 from .results import (Impact, PhaseSpan, Ready, SimulationResult, Trajectory, impact_coefficients,
                       point_name, point_number)
 from .scene import TOUCH_TOLERANCE, Scene
-from .validity import chattering_warning
-
-CHATTERING = "chattering"  # how chattering_warning's message begins
 
 METHODS = ("Radau", "BDF", "LSODA", "DOP853", "RK45")
 # Several stuck points: a direction of their holding forces' system weaker than this fraction
@@ -719,19 +716,6 @@ class ReferenceResult(SimulationResult):
             else:  # the tip alone: its own values are the totals
                 impact.W_normal_point, impact.W_friction_point = impact.W_normal, impact.W_friction
         return impacts
-
-    @cached_property
-    def warnings(self) -> list[str]:
-        """As any result's; with several points, chattering is judged over each point's own
-        impacts (two points' impacts overlap in time without being a chattering sequence)."""
-        found = SimulationResult.warnings.func(self)
-        if not self.several_points:
-            return found
-        kept = [w for w in found if not w.startswith(CHATTERING)]
-        for k in range(1, self.n + 1):
-            own = [i for i in self.impact_records if i.point == point_name(k, self.n)]
-            kept += [f"{point_name(k, self.n)}: {w}" for w in chattering_warning(own)]
-        return kept
 
     @property
     def point_works(self) -> dict[str, dict[str, float]]:

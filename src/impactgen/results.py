@@ -16,6 +16,7 @@ from typing import Any, Generic, NamedTuple, TypeVar
 
 import numpy as np
 
+from .codegen.spec import point_name, point_number
 from .dense import DenseSolution
 from .scene import Scene, Solver, replace_solver
 from .validity import YieldScale, energy_warning, frozen_friction_warning, validity_warnings
@@ -100,16 +101,6 @@ def tip_impacts(impacts: list[Impact]) -> list[Impact]:
     """The tip's impacts: what a run's summaries and the impact laws are made of (the joints'
     impacts are listed beside them, each naming its point)."""
     return [impact for impact in impacts if impact.point == "tip"]
-
-
-def point_name(number: int, n: int) -> str:
-    """The name of contact point `number` (1 to n) of an n-link chain: "joint k", or "tip"."""
-    return "tip" if number == n else f"joint {number}"
-
-
-def point_number(point: str, n: int) -> int:
-    """A point's number as the C engine records it: k for "joint k", n for "tip"."""
-    return n if point == "tip" else int(point.split()[-1])
 
 
 def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
@@ -349,7 +340,7 @@ class SimulationResult:
     make_stats: Callable[[], dict[str, Any]]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
     sol: DenseSolution | None = None
-    contact: YieldScale | None = None  # the contact constants the engine ran with, for `warnings`
+    contact: Mapping[str, YieldScale] | None = None  # each point's contact constants the engine ran with, for `warnings`
     tallied: "TallyRecords | tuple[Tallied, Tallied] | None" = None  # the C engine's summaries (run, first impact)
     solver: Solver | None = None  # the solver settings of the run (None given: the scene's own)
 

@@ -23,12 +23,14 @@ thinner than its steps, for one), whatever its own error estimate said.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
 
+from .codegen.spec import point_number
 from .codegen.thresholds import THRESHOLD
-from .laws import YIELD_ONSET, contact_constants, contact_radius
+from .laws import YIELD_ONSET, ContactConstants, contact_constants, contact_radius
 from .scene import Scene
 
 JACKSON_GREEN_MAX_W = 110.0
@@ -42,6 +44,7 @@ def chattering(before, now) -> bool:
 
 
 def chattering_warning(impacts) -> list[str]:
+    """The chattering of one contact point's impacts (in time order)."""
     for k in range(len(impacts) - 1):
         a, b = impacts[k], impacts[k + 1]
         if chattering(a, b):
@@ -49,6 +52,18 @@ def chattering_warning(impacts) -> list[str]:
                     f"{CHATTER_RATIO:g} contact times; the tip is settling onto the surface, and "
                     "without a sustained-contact phase the later impacts are not resolved reliably"]
     return []
+
+
+def chattering_by_point(impacts) -> list[str]:
+    """`chattering_warning` of each contact point's own impacts, named by its point when the
+    joints touch too (the impacts of two points overlap in time without chattering)."""
+    points = list(dict.fromkeys(impact.point for impact in impacts))
+    if points == ["tip"]:
+        return chattering_warning(impacts)
+    found = []
+    for point in points:
+        found += [f"{point}: {w}" for w in chattering_warning([i for i in impacts if i.point == point])]
+    return found
 
 
 class YieldScale(NamedTuple):
@@ -72,42 +87,59 @@ ENERGY_MARGIN = 1e5
 ENERGY_FLOOR = 1e-6
 
 
-def validity_warnings(scene: Scene, impacts, contact: YieldScale | None = None) -> list[str]:
-    """One warning per kind of trouble, naming the impacts it concerns. `contact`: the
-    constants the engine ran with (the C model derives them from the same expressions);
-    without them they are computed from the scene (which imports sympy). A sweep asks this
-    of every case, mostly of one impact and nothing to say: that path calls nothing."""
+def validity_warnings(scene: Scene, impacts, contact: Mapping[str, YieldScale] | None = None) -> list[str]:
+    """One warning per kind of trouble, naming the impacts it concerns. Each impact is judged
+    by the contact constants of its own point: `contact` has those the engine ran with, by
+    point name ("tip", "joint k"; the C model derives them from the same expressions); the
+    points it lacks are computed from the scene (which imports sympy). A sweep asks this of
+    every case, mostly of one impact and nothing to say: that path calls nothing."""
     solver = scene.solver
-    # with sustained contact the phase machine rests the tip instead: the phases say so
-    chatter = chattering_warning(impacts) if len(impacts) > 1 and not (
+    # with sustained contact the phase machine rests the point instead: the phases say so
+    chatter = chattering_by_point(impacts) if len(impacts) > 1 and not (
         solver.t_end is not None and solver.sustained_contact) else []
     found: dict[str, list[tuple[int, str]]] = {}
     resolution = solver.rtol * sum(scene.chain.length)  # the angles carry rtol |q|
     for k, impact in enumerate(impacts, start=1):
         if 0 < impact.delta_max < RESOLUTION_MARGIN * resolution:
             found.setdefault("resolution", []).append(
-                (k, f"delta_max = {impact.delta_max:.3g} m is within {RESOLUTION_MARGIN:g} times the tip "
+                (k, f"{_at(impact)}delta_max = {impact.delta_max:.3g} m is within {RESOLUTION_MARGIN:g} times the "
                     f"position's resolution rtol * sum(L) = {resolution:.1g} m: the energy budget closes "
                     "only to about (resolution / delta_max)^2 of T0; tighten solver.rtol"))
     if impacts and scene.contact.model == "three-phase":
-        c = contact if contact is not None else contact_constants(scene)
+        constants = dict(contact) if contact else {}
         for k, impact in enumerate(impacts, start=1):
+            c = constants.get(impact.point)
+            if c is None:
+                c = constants[impact.point] = point_constants(scene, impact.point)
             w = impact.delta_max / c.delta_c
             if impact.delta_max >= YIELD_ONSET * c.delta_c:
                 a = contact_radius(impact.delta_max, c)
                 if a >= c.R:
                     found.setdefault("radius", []).append(
-                        (k, f"contact radius a = {a:.3g} m reaches the tip radius {c.R:.3g} m; "
+                        (k, f"{_at(impact)}contact radius a = {a:.3g} m reaches the "
+                            f"{'tip' if impact.point == 'tip' else 'joint'}'s radius {c.R:.3g} m; "
                             "Hertz and Jackson-Green assume a << R"))
             if w > JACKSON_GREEN_MAX_W:
                 found.setdefault("range", []).append(
-                    (k, f"delta_max = {w:.3g} delta_c, beyond the {JACKSON_GREEN_MAX_W:g} delta_c "
+                    (k, f"{_at(impact)}delta_max = {w:.3g} delta_c, beyond the {JACKSON_GREEN_MAX_W:g} delta_c "
                         "that the Jackson-Green fits cover"))
             if 0 < w < 1:
                 found.setdefault("elastic", []).append(
-                    (k, f"the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
+                    (k, f"{_at(impact)}the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
                         "a purely Hertzian impact, delta_r = 0"))
     return _grouped(found, len(impacts)) + chatter if found else chatter
+
+
+def point_constants(scene: Scene, point: str) -> ContactConstants:
+    """The contact constants of a contact point ("tip", "joint k"), with its own radius."""
+    if point == "tip":
+        return contact_constants(scene)
+    return contact_constants(scene, scene.joint_radii[point_number(point, scene.n) - 1])
+
+
+def _at(impact) -> str:
+    """Where an impact was, as a warning's text begins: nothing for the tip."""
+    return "" if impact.point == "tip" else f"at {impact.point}, "
 
 
 def _grouped(found: dict[str, list[tuple[int, str]]], n_impacts: int) -> list[str]:
@@ -134,8 +166,9 @@ def frozen_friction_warning(scene: Scene, impacts, t, y) -> list[str]:
     reversed_at = []
     for k, impact in enumerate(impacts, start=1):
         i1 = impact.i_end if impact.i_end is not None else len(t) - 1
-        q, u = y[impact.i_start:i1 + 1, :n], y[impact.i_start:i1 + 1, n:2 * n]
-        v_x = -(L * np.sin(q) * u).sum(axis=1)  # the tip's tangential speed at each sample
+        links = point_number(impact.point, n)  # the point is the end of this many links
+        q, u = y[impact.i_start:i1 + 1, :links], y[impact.i_start:i1 + 1, n:n + links]
+        v_x = -(L[:links] * np.sin(q) * u).sum(axis=1)  # the point's tangential speed at each sample
         start = np.sign(v_x[0])
         turned = np.nonzero(v_x * start < 0)[0] if start != 0 else []
         if len(turned):
@@ -144,7 +177,7 @@ def frozen_friction_warning(scene: Scene, impacts, t, y) -> list[str]:
         return []
     k, when = reversed_at[0]
     which = "the impact" if len(impacts) == 1 else f"{len(reversed_at)} of {len(impacts)} impacts (first: impact {k})"
-    return [f"{which}: the tip's tangential speed reverses (t = {when:.6g} s) while friction_mode = \"frozen\" "
+    return [f"{which}: the {'tip' if impacts[k - 1].point == 'tip' else 'point'}'s tangential speed reverses (t = {when:.6g} s) while friction_mode = \"frozen\" "
             "keeps the friction's direction from contact start; from there on the friction does positive work, "
             "which is not physical (the mode reproduces the paper's published energy losses; "
             "\"regularized\" or \"coulomb\" is the physical law)"]
