@@ -113,11 +113,13 @@ class ModelExpressions:
     joints: tuple[JointMotion, ...] = ()  # the joints that can touch the surface (spec.joints)
 
     @property
-    def point_works(self) -> tuple[str, ...]:
-        """The states after the impulses: each joint's own works, W_normal_J<k>[, W_friction_J<k>]
-        (W_normal and W_friction are every point's together: the budget's terms)."""
+    def point_integrals(self) -> tuple[str, ...]:
+        """The states after the impulses: each joint's own works and impulses, W_normal_J<k>[,
+        W_friction_J<k>], P_normal_J<k>[, P_friction_J<k>] (W_normal and W_friction are every
+        point's together, the budget's terms; P_normal and P_friction are the tip's own)."""
         kinds = ("normal", "friction") if self.spec.has_friction else ("normal",)
-        return tuple(f"W_{kind}_J{jm.joint}" for jm in self.joints for kind in kinds)
+        return tuple(f"{integral}_{kind}_J{jm.joint}" for jm in self.joints for integral in ("W", "P")
+                     for kind in kinds)
 
     @property
     def integrals(self) -> tuple[Named, ...]:
@@ -134,7 +136,7 @@ class ModelExpressions:
     def state_names(self) -> tuple[str, ...]:
         s = self.chain.symbols
         return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works) + tuple(
-            p.name for p in self.impulses) + self.point_works
+            p.name for p in self.impulses) + self.point_integrals
 
 
 @lru_cache(maxsize=32)

@@ -162,3 +162,21 @@ def test_chattering_is_judged_point_by_point():
     settling = apart + [impact("tip", 0.611, 0.62)]
     found = chattering_by_point(sorted(settling, key=lambda i: i.t_start))
     assert len(found) == 1 and found[0].startswith("tip: chattering from impact 2 on")
+
+
+def test_every_point_has_its_own_works_impulses_and_coefficients():
+    """Each joint's own works and impulses are integrated (W_normal_J2, P_normal_J2, ...), so a
+    joint's impact has its coefficients of restitution as the tip's has (the crosscheck holds
+    them to the reference engine's); each point's impacts' own works add up to its works
+    over the run."""
+    scene = impactgen.load_scene("paper", {**THREE_LINKS, "solver.t_end": 0.3, "solver.sustained_contact": False})
+    result = impactgen.simulate(scene)
+    assert result.status == "ok", result.message
+    assert {"W_normal_J2", "W_friction_J2", "P_normal_J2", "P_friction_J2"} <= set(result.state_names)
+    for point, works in result.point_works.items():
+        own = [i for i in result.impacts if i.point == point]
+        assert own and all(0 < i.e_N < 1 and 0 < i.e_P < 1 and 0 < i.e_E < 1 for i in own if i.t_end is not None)
+        assert sum(i.W_normal_point for i in own) == pytest.approx(works["W_normal"], rel=1e-9)
+        assert sum(i.W_friction_point for i in own) == pytest.approx(works["W_friction"], rel=1e-9)
+    first_tip = next(i for i in result.impacts if i.point == "tip")
+    assert result.summary["coefficients"]["e_N"] == pytest.approx(first_tip.e_N, rel=1e-12)

@@ -638,6 +638,12 @@ void model_heights(const double *y, double *h, const model_params *p)
 
 }
 
+void model_tip_works(const double *y, double *W_normal, double *W_friction)
+{
+    *W_normal = y[MODEL_Y_W_normal];
+    *W_friction = y[MODEL_Y_W_friction];
+}
+
 double model_delta_acceleration(const double *y, const double *ydot, const model_params *p)
 {
     const double q1 = y[0];

@@ -105,6 +105,9 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p);
  * the links (1 to 2) then the tip. h[k] = their heights above the surface y_s. */
 #define MODEL_NPOINT 3
 void model_heights(const double *y, double *h, const model_params *p);
+/* The tip's own works in y, J (the impact coefficients' terms): the works of every point's
+ * forces, W_normal[, W_friction], less each joint's own (0 without friction). */
+void model_tip_works(const double *y, double *W_normal, double *W_friction);
 /* d2(delta)/dt2 at y, given ydot = dy/dt (from model_rhs): the tip's acceleration into
  * the surface (the start rule of a tip resting on it). */
 double model_delta_acceleration(const double *y, const double *ydot, const model_params *p);

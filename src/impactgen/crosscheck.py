@@ -15,7 +15,7 @@ import numpy as np
 
 from .codegen.spec import PHASES
 from .errors import SolverError
-from .results import SimulationResult
+from .results import Impact, SimulationResult
 from .scene import Scene, scene_from_dict, load_scene, steel_chain_scene
 
 QUANTITIES = ("u_final", "q_final", "delta_max", "delta_r", "delta_T", "t_contact", "switch_times",
@@ -160,8 +160,9 @@ def compare(c: SimulationResult, ref: SimulationResult) -> dict[str, float]:
 def _compare_points(c: SimulationResult, ref: SimulationResult) -> dict[str, float]:
     """`compare` for several contact points: the final state, Delta T and the trajectory as
     there; the impacts one by one, in time order (inf where the engines list other points):
-    delta_max, delta_r (against delta_max), each one's contact time, and the times of every
-    start and end (switch_times, against the latest)."""
+    delta_max, delta_r (against delta_max), each one's contact time, the times of every
+    start and end (switch_times, against the latest), and each point's own coefficients of
+    restitution."""
     a, b = c.summary, ref.summary
     out = {"u_final": _rel(a["u_final"], b["u_final"], float(np.max(np.abs(ref.u)))),
            "q_final": _rel(a["q_final"], b["q_final"]),
@@ -169,9 +170,10 @@ def _compare_points(c: SimulationResult, ref: SimulationResult) -> dict[str, flo
            "delta_T": abs(a["delta_T"] - b["delta_T"]) / max(abs(b["T0"]), float(np.max(ref.T)), 1e-300)}
     mine, theirs = c.impacts, ref.impacts
     if [i.point for i in mine] != [i.point for i in theirs]:
-        out.update(delta_max=math.inf, delta_r=math.inf, t_contact=math.inf, switch_times=math.inf)
+        out.update(delta_max=math.inf, delta_r=math.inf, t_contact=math.inf, switch_times=math.inf,
+                   coefficients=math.inf)
     elif not theirs:
-        out.update(delta_max=0.0, delta_r=0.0, t_contact=0.0, switch_times=0.0)
+        out.update(delta_max=0.0, delta_r=0.0, t_contact=0.0, switch_times=0.0, coefficients=0.0)
     else:
         t_last = float(ref.t[-1])
 
@@ -184,9 +186,23 @@ def _compare_points(c: SimulationResult, ref: SimulationResult) -> dict[str, flo
         out["t_contact"] = _rel(ends(mine) - starts_c, ends(theirs) - starts_r, 1e-300)
         out["switch_times"] = _rel(np.concatenate([starts_c, ends(mine)]), np.concatenate([starts_r, ends(theirs)]),
                                    1e-300)
+        out["coefficients"] = max(_coefficient_gap(i, j) for i, j in zip(mine, theirs))
     q_c, inside = _hermite_q(c, ref.t)
     out["trajectory_q"] = _rel(q_c[inside], ref.q.T[inside]) if inside.any() else 0.0
     return out
+
+
+def _coefficient_gap(mine: Impact, theirs: Impact) -> float:
+    """The largest difference of two records' coefficients of restitution (numbers near 1);
+    inf where one engine has one that the other has not (an impact that did not end)."""
+    gap = 0.0
+    for name in ("e_N", "e_P", "e_E"):
+        a, b = getattr(mine, name), getattr(theirs, name)
+        if math.isnan(a) != math.isnan(b):
+            return math.inf
+        if not math.isnan(a):
+            gap = max(gap, abs(a - b))
+    return gap
 
 
 @dataclass

@@ -672,15 +672,9 @@ class PointImpact(Impact):
     and `W_friction_point` are this point's own, and the impulses and coefficients
     (docs/model.md section 9) are this point's, from its own normal speed and forces."""
 
-    W_normal_point: float = math.nan  # J, work of this point's normal force over the impact
-    W_friction_point: float = math.nan  # J, of its friction force
     # its integrals (W_normal[, W_friction], P_normal[, P_friction]) at its start, maximum
     # compression and end, and its normal speed at its start and end; filled by the engine
     own: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {**super().to_dict(), "W_normal_point": self.W_normal_point,
-                "W_friction_point": self.W_friction_point}
 
     def use_own_values(self, names: tuple[str, ...]) -> None:
         """This point's works, impulses and coefficients from its own integrals (`names`:
@@ -710,11 +704,9 @@ class ReferenceResult(SimulationResult):
         """The impacts (their energies from the samples), each with its point's own values."""
         impacts = SimulationResult.impacts.func(self)
         names = self.trajectory.state_names[2 * self.n:]  # the works, then the impulses
-        for impact in impacts:
-            if self.several_points:
+        if self.several_points:  # the tip alone: its own values are the totals, as made already
+            for impact in impacts:
                 impact.use_own_values(names)
-            else:  # the tip alone: its own values are the totals
-                impact.W_normal_point, impact.W_friction_point = impact.W_normal, impact.W_friction
         return impacts
 
     @property

@@ -61,13 +61,15 @@ class Impact:
     stick_slip: list[tuple[float, str, str]] = field(default_factory=list)  # exact Coulomb: (t, from, to)
     T_before: float = math.nan  # J, kinetic energy at first contact
     T_after: float = math.nan  # J, at separation (or the end of the run)
-    W_normal: float = 0.0  # J, work of the normal force over the impact
+    W_normal: float = 0.0  # J, work of the normal force over the impact (of every point's: the energy budget's)
     W_friction: float = 0.0  # J
     W_gravity: float = 0.0  # J
+    W_normal_point: float = math.nan  # J, work of this point's own normal force over the impact
+    W_friction_point: float = math.nan  # J, of its own friction force
     i_max: int | None = None  # sample index at (the latest) maximum compression
     # impulses and coefficients of restitution (docs/model.md section 9; COEFFICIENTS), from
     # the samples at its start, maximum compression and end; NaN until it has ended
-    v_n0: float = math.nan  # m/s, the tip's normal speed at first contact (negative approaching)
+    v_n0: float = math.nan  # m/s, the point's normal speed at first contact (negative approaching)
     P_c: float = math.nan  # N s, normal impulse of compression
     P_r: float = math.nan  # N s, of restitution
     P_t: float = math.nan  # N s, tangential (friction) impulse
@@ -92,6 +94,7 @@ class Impact:
             "delta_max": self.delta_max, "delta_r": self.delta_r, "P_max": self.P_max,
             "R_res": self.R_res, "T_before": self.T_before, "T_after": self.T_after,
             "W_normal": self.W_normal, "W_friction": self.W_friction, "W_gravity": self.W_gravity,
+            "W_normal_point": self.W_normal_point, "W_friction_point": self.W_friction_point,
             **self.coefficients(),
             "switches": _switch_list(self.switches), "stick_slip": _switch_list(self.stick_slip),
         }
@@ -125,7 +128,8 @@ COEFFICIENT_UNITS = {"v_n0": "m/s", "P_c": "N s", "P_r": "N s", "P_t": "N s", "e
 COEFFICIENTS = tuple(COEFFICIENT_UNITS)
 IMPACT_UNITS = {"point": "", "t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
                 "P_max": "N", "R_res": "m", "T_before": "J", "T_after": "J", "W_normal": "J",
-                "W_friction": "J", "W_gravity": "J", **COEFFICIENT_UNITS}
+                "W_friction": "J", "W_gravity": "J", "W_normal_point": "J", "W_friction_point": "J",
+                **COEFFICIENT_UNITS}
 
 
 def impact_coefficients(begin, at_max, end, v_n0: float, v_n1: float) -> dict[str, float]:
@@ -577,7 +581,9 @@ class SimulationResult:
 
 
 def _fill_impact_energies(traj: Trajectory, impacts: list[Impact]) -> None:
-    """Kinetic energy before and after each impact, and the works over it, from the samples."""
+    """Kinetic energy before and after each impact and the works over it, from the samples;
+    and its point's own works, impulses and coefficients, from the point's own integrals where
+    the samples carry them (the C engine's; the reference engine keeps its points' apart)."""
     last = len(traj.t) - 1
     for impact in impacts:
         i0 = impact.i_start
@@ -585,17 +591,32 @@ def _fill_impact_energies(traj: Trajectory, impacts: list[Impact]) -> None:
         impact.T_before, impact.T_after, works = _budget(traj, i0, i1)
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
-        if impact.point != "tip":  # a joint's normal speed (C: its impulses are not integrated)
-            v_y = f"v_y_J{point_number(impact.point, 0)}"
-            if v_y in traj.outputs:
-                impact.v_n0 = float(traj.outputs[v_y][i0])
+        speed = "v_By" if impact.point == "tip" else f"v_y_J{point_number(impact.point, 0)}"
+        begin, end = _own_integrals(traj, i0, impact.point), _own_integrals(traj, i1, impact.point)
+        if not begin or speed not in traj.outputs:
             continue
-        v_n = traj.outputs["v_By"]
+        impact.W_normal_point = end["W_normal"] - begin["W_normal"]
+        impact.W_friction_point = end.get("W_friction", 0.0) - begin.get("W_friction", 0.0)
+        v_n = traj.outputs[speed]
         impact.v_n0 = float(v_n[i0])  # the rest once it has ended (as the C engine tallies them)
         if impact.i_end is not None and impact.i_max is not None:
-            begin, at_max, end = (traj.states_at(i) for i in (i0, impact.i_max, i1))
+            at_max = _own_integrals(traj, impact.i_max, impact.point)
             for name, value in impact_coefficients(begin, at_max, end, float(v_n[i0]), float(v_n[i1])).items():
                 setattr(impact, name, value)
+
+
+def _own_integrals(traj: Trajectory, i: int, point: str) -> dict[str, float]:
+    """A contact point's own works and impulses at sample i, by the tip's state names (W_normal,
+    P_normal, ...): a joint's are its states W_normal_J<k>, ... ({} where the samples have
+    none); the tip's are the totals less every joint's works (its impulses are its own)."""
+    states = traj.states_at(i)
+    if point == "tip":
+        for name, value in list(states.items()):
+            if name.startswith("W_") and "_J" in name:
+                states[name.rsplit("_J", 1)[0]] -= value
+        return states
+    suffix = f"_J{point_number(point, 0)}"
+    return {name[:-len(suffix)]: value for name, value in states.items() if name.endswith(suffix)}
 
 
 def _budget(traj: Trajectory, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:

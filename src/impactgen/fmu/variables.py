@@ -65,9 +65,9 @@ def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()
         doc = (f"absolute angle of link {k + 1}" if k < n else
                f"angular speed of link {k - n + 1}" if k < 2 * n else
                f"impulse of the {name[2:]} force" if impulse else f"work of the {name[2:]} force")
-        if k >= 2 * n and "_J" in name:  # a joint's own work, W_normal_J2: contact[2].W_normal
+        if k >= 2 * n and "_J" in name:  # a joint's own work or impulse, W_normal_J2: contact[2].W_normal
             kind, joint = name.rsplit("_J", 1)
-            label, doc = f"contact[{joint}].{kind}", f"work of the {kind[2:]} force at joint {joint}"
+            label, doc = f"contact[{joint}].{kind}", f"{'impulse' if impulse else 'work'} of the {kind[2:]} force at joint {joint}"
         states.append(add(name=label, type="Real", causality="local", variability="continuous",
                           initial="calculated" if k < 2 * n else "exact", start=None if k < 2 * n else 0.0,
                           unit=unit, description=doc, kind="state", index=k))

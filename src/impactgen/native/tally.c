@@ -6,10 +6,12 @@
 
 #include "tally.h"
 
-/* ---- impact coefficients (MODEL section 9): the impulses and the normal speed at a sample,
- * the first impact's maximum compression, and the coefficients from the three samples ---- */
-static void read_impulses(ig_point *point, const double *y, const double *out)
+/* ---- impact coefficients (MODEL section 9): the tip's own works, impulses and normal speed at
+ * a sample, the first impact's maximum compression, and the coefficients from the three
+ * samples ---- */
+static void read_tip(ig_point *point, const double *y, const double *out)
 {
+    model_tip_works(y, &point->W_normal_tip, &point->W_friction_tip);
     point->P_normal = y[MODEL_Y_P_normal];
 #ifdef MODEL_Y_P_friction
     point->P_friction = y[MODEL_Y_P_friction];
@@ -32,7 +34,7 @@ void ig_read_point(ig_point *point, double t, const double *y, const double *out
     point->W_friction = 0.0;
 #endif
     memcpy(point->y, y, sizeof point->y);
-    read_impulses(point, y, out);
+    read_tip(point, y, out);
 }
 
 /* Follow the first impact's maximum compression (the latest, after a reloading). */
@@ -52,8 +54,8 @@ static void summarize_coefficients(const ig_tally *a, ig_summary *out)
     out->v_n0 = a->impacts ? b->v_n : NAN;
     out->P_c = out->P_r = out->P_t = out->e_N = out->e_P = out->e_E = out->friction_share = NAN;
     if (a->ended == 0 || !a->first_compressed) return;
-    const double W_c = m->W_normal - b->W_normal, W_r = e->W_normal - m->W_normal;
-    const double W_f = e->W_friction - b->W_friction;
+    const double W_c = m->W_normal_tip - b->W_normal_tip, W_r = e->W_normal_tip - m->W_normal_tip;
+    const double W_f = e->W_friction_tip - b->W_friction_tip;
     out->P_c = m->P_normal - b->P_normal;
     out->P_r = e->P_normal - m->P_normal;
     out->P_t = e->P_friction - b->P_friction;

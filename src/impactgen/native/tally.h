@@ -33,8 +33,10 @@ typedef struct {
 typedef struct {
     double t, T, V, W_normal, W_friction;
     double y[MODEL_NSTATE];
-    double P_normal, P_friction;  /* the impulses of the contact forces (P_friction 0 without friction), N s */
-    double v_n;                   /* the contact point's normal speed (v_By, negative approaching), m/s */
+    /* the tip's own (the impact coefficients' terms): its works (model_tip_works), J, and its
+     * impulses (P_friction 0 without friction), N s, and its normal speed (v_By, negative
+     * approaching), m/s */
+    double W_normal_tip, W_friction_tip, P_normal, P_friction, v_n;
 } ig_point;
 
 /* What a run keeps for its summaries while ig_run goes from segment to segment (over all
