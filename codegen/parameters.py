@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import attrgetter
 from typing import Any, Callable
 
 INF = math.inf
@@ -35,7 +36,9 @@ class Parameter:
     needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "frozen" | "used"
     per_link: bool = False
     per_joint: bool = False
-    read: Callable[[Any], Any] | None = None  # the value from a scene (a per-link row: the tuple of the links')
+    # the value from a scene (a per-link row: the tuple of the links'): the attribute it names
+    # (attrgetter: no Python call per row and run), or what a function computes from the scene
+    read: Callable[[Any], Any] | None = None
     low: float = -INF  # physical range of an input, for the C check (fmi2SetReal)
     high: float = INF
     low_open: bool = False  # the range excludes `low`
@@ -78,26 +81,26 @@ POISSON = {"low": -1.0, "high": 0.5, "low_open": True, "high_open": True}
 
 PARAMETERS: tuple[Parameter, ...] = (
     Parameter("L", "chain.length[{i}]", "m", "length of link {i}", "input", per_link=True,
-              read=lambda s: s.chain.length, **POSITIVE),
+              read=attrgetter("chain.length"), **POSITIVE),
     Parameter("m", "chain.mass[{i}]", "kg", "mass of link {i}", "input", per_link=True,
-              read=lambda s: s.chain.mass, **POSITIVE),
-    Parameter("g", "chain.gravity", "m/s2", "gravity", "input", read=lambda s: s.chain.gravity, low=0.0),
+              read=attrgetter("chain.mass"), **POSITIVE),
+    Parameter("g", "chain.gravity", "m/s2", "gravity", "input", read=attrgetter("chain.gravity"), low=0.0),
     Parameter("E_rod", "rod.E", "Pa", "Young's modulus of the rod", "input",
-              read=lambda s: s.rod.E, **POSITIVE),
+              read=attrgetter("rod.E"), **POSITIVE),
     Parameter("nu_rod", "rod.nu", "1", "Poisson ratio of the rod", "input",
-              read=lambda s: s.rod.nu, **POISSON),
+              read=attrgetter("rod.nu"), **POISSON),
     Parameter("S_y_rod", "rod.yield_strength", "Pa", "yield strength of the rod", "input",
-              read=lambda s: s.rod.yield_strength, **POSITIVE),
+              read=attrgetter("rod.yield_strength"), **POSITIVE),
     Parameter("R_tip", "rod.tip_radius", "m", "radius of the rod's spherical tip", "input",
-              read=lambda s: s.tip_radius, **POSITIVE),
+              read=attrgetter("tip_radius"), **POSITIVE),
     Parameter("E_surface", "surface.E", "Pa", "Young's modulus of the surface", "input",
-              read=lambda s: s.surface.E, **POSITIVE),
+              read=attrgetter("surface.E"), **POSITIVE),
     Parameter("nu_surface", "surface.nu", "1", "Poisson ratio of the surface", "input",
-              read=lambda s: s.surface.nu, **POISSON),
+              read=attrgetter("surface.nu"), **POISSON),
     Parameter("S_y_surface", "surface.yield_strength", "Pa", "yield strength of the surface", "input",
-              read=lambda s: s.surface.yield_strength, **POSITIVE),
+              read=attrgetter("surface.yield_strength"), **POSITIVE),
     Parameter("R_joint", "contact.joint_radius[{i}]", "m", "radius of joint {i}'s contact (the end of link {i})",
-              "input", per_joint=True, read=lambda s: s.joint_radii, **POSITIVE),
+              "input", per_joint=True, read=attrgetter("joint_radii"), **POSITIVE),
     Parameter("surface_height", "surface.height", "m",
               "height of the undeformed surface (ignored when surface.height_initial is set)", "input",
               read=lambda s: 0.0 if s.surface_height is None else s.surface_height),
@@ -106,9 +109,9 @@ PARAMETERS: tuple[Parameter, ...] = (
               read=lambda s: 1.0 if s.surface_height is None else 0.0, low=0.0, high=1.0,
               fmi_type="Boolean"),
     Parameter("mu", "contact.friction", "1", "friction coefficient", "input", needs="friction",
-              read=lambda s: s.contact.friction, low=0.0),
+              read=attrgetter("contact.friction"), low=0.0),
     Parameter("eps", "contact.friction_eps", "m/s", "regularization speed of the friction sign", "input",
-              needs="regularized", read=lambda s: s.contact.friction_eps, **POSITIVE),
+              needs="regularized", read=attrgetter("contact.friction_eps"), **POSITIVE),
     Parameter("E_star", "", "Pa", "reduced modulus E* (Eq. 7)", "derived", needs="used"),
     Parameter("R", "", "m", "reduced tip radius (Eq. 8)", "derived", needs="used"),
     Parameter("C_j", "", "1", "critical yield coefficient", "derived", needs="used"),
