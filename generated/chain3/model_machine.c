@@ -409,20 +409,20 @@ static void impact_scales(const model_params *p, double R, double v_x, double v_
 static void impact_begins(model_machine *m, model_params *p, double t, const double *y,
                           const double *out, int into_dent)
 {
-    m->impacts += 1;
-    m->t_prev_start = m->t_start;
-    m->t_prev_end = m->t_end;
-    m->t_start = t;
-    m->t_end = NAN;
+    m->tip.impacts += 1;
+    m->tip.t_prev_start = m->tip.t_start;
+    m->tip.t_prev_end = m->tip.t_end;
+    m->tip.t_start = t;
+    m->tip.t_end = NAN;
     if (!into_dent) {  /* a new impact on the undeformed surface (back into its own dent: its law kept) */
-        m->delta_max = m->P_max = m->delta_r = 0.0;
-        m->R_res = p->R;
+        m->tip.delta_max = m->tip.P_max = m->tip.delta_r = 0.0;
+        m->tip.R_res = p->R;
         p->delta_m = 0.0;
         p->delta_r = 0.0;
         p->R_res = p->R;
     }
     const double v_Bx = out[MODEL_OUT_v_Bx], v_By = out[MODEL_OUT_v_By];
-    impact_scales(p, p->R, v_Bx, v_By, fmax(out[MODEL_OUT_delta_rate], 0.0), out[MODEL_OUT_T], y, m->scale);
+    impact_scales(p, p->R, v_Bx, v_By, fmax(out[MODEL_OUT_delta_rate], 0.0), out[MODEL_OUT_T], y, m->tip.scale);
 }
 
 int model_machine_start(model_machine *m, model_params *p, double t, const double *y,
@@ -431,11 +431,11 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     double out[MODEL_NOUT];
     memset(m, 0, sizeof *m);
     m->run_to_time = run_to_time;
-    m->stick_excess = -INFINITY;
-    m->t_start = m->t_end = m->t_prev_start = m->t_prev_end = NAN;
-    m->slip = 1.0;  /* free flight: no friction, whatever the state */
-    m->R_res = p->R;
-    m->state = MODEL_MACHINE_FREE;
+    m->tip.stick_excess = -INFINITY;
+    m->tip.t_start = m->tip.t_end = m->tip.t_prev_start = m->tip.t_prev_end = NAN;
+    m->tip.slip = 1.0;  /* free flight: no friction, whatever the state */
+    m->tip.R_res = p->R;
+    m->tip.state = MODEL_MACHINE_FREE;
     p->phase = MODEL_PHASE_FREE;
     p->delta_m = 0.0;
     p->delta_r = 0.0;
@@ -446,7 +446,7 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
         p->y_s = out[MODEL_OUT_y_B];
         model_outputs(t, y, out, p);
     }
-    for (int i = 0; i < MODEL_NSTATE; ++i) m->scale[i] = 1.0;
+    for (int i = 0; i < MODEL_NSTATE; ++i) m->tip.scale[i] = 1.0;
     const double delta = out[MODEL_OUT_delta];
     double rate = out[MODEL_OUT_delta_rate];
     const int touching = delta >= -MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
@@ -457,8 +457,8 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
      * (to the first separation, such a start is no impact: MODEL_START_ALONG) */
     if (touching && (rate > 0.0 || (run_to_time && pulled_in(p, t, y, out)))) {
         impact_begins(m, p, t, y, out, 0);
-        m->state = MODEL_MACHINE_ELASTIC;
-        p->phase = law_of(m->state);
+        m->tip.state = MODEL_MACHINE_ELASTIC;
+        p->phase = law_of(m->tip.state);
         return MODEL_START_CONTACT;
     }
     if (touching && !run_to_time) return rate == 0.0 ? MODEL_START_ALONG : MODEL_START_AWAY;
@@ -503,7 +503,7 @@ static int watch_state(int state, int base, int *events, int *directions)
 
 int model_machine_events(const model_machine *m, int *events, int *directions)
 {
-    int k = watch_state(m->state, 0, events, directions);
+    int k = watch_state(m->tip.state, 0, events, directions);
     return k;
 }
 #undef WATCH
@@ -538,8 +538,8 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     int has[MODEL_NEVENT] = {0};
     const int watched = model_machine_events(m, events, directions);
     int contact_fired = 0, slip_fired = 0, act = 0;
-    m->stick_excess = -INFINITY;  /* a new segment follows */
-    m->stick_F = 0.0;
+    m->tip.stick_excess = -INFINITY;  /* a new segment follows */
+    m->tip.stick_F = 0.0;
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
@@ -557,7 +557,7 @@ static int tip_switch(model_machine *m, model_params *p, double t, const double 
     (void)slip_fired;
     double out[MODEL_NOUT];  /* under the force law that has been acting */
     model_outputs(t, y, out, p);
-    const int state = m->state;
+    const int state = m->tip.state;
     int act = MODEL_ACT_RESTART;
     int next = next_state(state, has, p);
     if (state == MODEL_MACHINE_FREE) {
@@ -571,10 +571,10 @@ static int tip_switch(model_machine *m, model_params *p, double t, const double 
         p->delta_r = delta_r;
         p->R_res = R_res;
         p->delta_m = delta_max;
-        m->delta_max = delta_max;
-        m->P_max = P_m;
-        m->delta_r = delta_r;
-        m->R_res = R_res;
+        m->tip.delta_max = delta_max;
+        m->tip.P_max = P_m;
+        m->tip.delta_r = delta_r;
+        m->tip.R_res = R_res;
         act |= MODEL_ACT_MAX_COMPRESSION;
     }
     if (next == MODEL_MACHINE_FREE && state == MODEL_MACHINE_RESTITUTION && pulled_in(p, t, y, out)) {
@@ -583,13 +583,13 @@ static int tip_switch(model_machine *m, model_params *p, double t, const double 
         next = MODEL_MACHINE_RELOADING;
     }
     if (next == MODEL_MACHINE_FREE) {
-        m->t_end = t;
+        m->tip.t_end = t;
         act |= MODEL_ACT_IMPACT_END | MODEL_ACT_TOLERANCES;
         if (!m->run_to_time) act |= MODEL_ACT_END;
         else if (state == MODEL_MACHINE_SUSTAINED) p->y_s -= out[MODEL_OUT_delta];  /* the surface is where the tip left it */
-        for (int i = 0; i < MODEL_NSTATE; ++i) m->scale[i] = 1.0;
+        for (int i = 0; i < MODEL_NSTATE; ++i) m->tip.scale[i] = 1.0;
     }
-    m->state = next;
+    m->tip.state = next;
     p->phase = law_of(next);
     return act;
 }
@@ -618,10 +618,10 @@ void model_machine_atol(const model_machine *m, const model_params *p, double rt
     const double energy = fmax(chain_mass(p) * fmax(p->g, 1.0) * chain_length(p), 1e-30);
     for (int i = 0; i < 6; ++i) atol_out[i] = atol;
     for (int i = 6; i < MODEL_NSTATE; ++i) atol_out[i] = atol * energy;
-    if (m->state != MODEL_MACHINE_FREE) {
+    if (m->tip.state != MODEL_MACHINE_FREE) {
         /* inside an impact: rtol times its scales, never looser than in free flight */
-        for (int i = 0; i < 3; ++i) atol_out[i] = fmin(fmax(rtol * m->scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
-        for (int i = 3; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * m->scale[i], 1e-300));
+        for (int i = 0; i < 3; ++i) atol_out[i] = fmin(fmax(rtol * m->tip.scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
+        for (int i = 3; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * m->tip.scale[i], 1e-300));
     }
     /* the impulses follow the steps the other states set (with them in
      * the error test, the paper's impact took 68 steps instead of 59 for the same motion) */
