@@ -20,7 +20,7 @@ from .expressions import ModelExpressions
 from .spec import STATES
 from .thresholds import THRESHOLD, THRESHOLDS  # noqa: F401 (the machine prints them)
 
-API_VERSION = 1  # the C API of model.h and model_machine.h: bumped when a signature changes
+API_VERSION = 2  # the C API of model.h and model_machine.h: bumped when a signature or a struct changes (2: m.tip)
 
 
 @dataclass(frozen=True)

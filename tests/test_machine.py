@@ -30,7 +30,7 @@ class Probe:
         return getattr(self.lib, f"MODEL_MACHINE_{state.upper()}")
 
     def watched(self, state: str, slip: float = 1.0) -> list[tuple[str, int]]:
-        self.m.state, self.m.slip = self.code(state), slip
+        self.m.tip.state, self.m.tip.slip = self.code(state), slip
         ev, dirs = self.ffi.new("int[16]"), self.ffi.new("int[16]")
         k = self.lib.model_machine_events(self.m, ev, dirs)
         return [(self.model.event_names[ev[i]], dirs[i]) for i in range(k)]
@@ -39,7 +39,7 @@ class Probe:
         events = [name for name, _ in self.watched(state, slip)]
         flags = self.ffi.new("int[16]", [1 if name in fired else 0 for name in events])
         self.lib.model_machine_switch(self.m, self.params, 0.0, self.y, flags)
-        return self.ffi.string(self.lib.model_machine_state_name(self.m.state)).decode()
+        return self.ffi.string(self.lib.model_machine_state_name(self.m.tip.state)).decode()
 
 
 def test_critical_load_is_the_hertz_force_at_the_critical_deformation(paper_scene):
@@ -99,9 +99,9 @@ def test_stick_slip_rules(paper_scene):
     assert ("slip_stops", 1) in probe.watched("elastic", slip=-1.0)
     assert {("slip_backward", -1), ("slip_forward", -1)} <= set(probe.watched("elastic", slip=0.0))
     # leaving a stick: by the side of the cone reached, the contact phase unchanged
-    assert probe.after("elastic", ["slip_backward"], slip=0.0) == "elastic" and probe.m.slip == -1.0
-    assert probe.after("elastic", ["slip_forward"], slip=0.0) == "elastic" and probe.m.slip == +1.0
-    assert probe.params.slip == probe.m.slip
+    assert probe.after("elastic", ["slip_backward"], slip=0.0) == "elastic" and probe.m.tip.slip == -1.0
+    assert probe.after("elastic", ["slip_forward"], slip=0.0) == "elastic" and probe.m.tip.slip == +1.0
+    assert probe.params.slip == probe.m.tip.slip
 
 
 def test_a_bad_input_is_named_by_its_scene_key(paper_scene):
@@ -119,12 +119,12 @@ def test_a_bad_input_is_named_by_its_scene_key(paper_scene):
 def test_free_flight_and_impact_tolerances(paper_scene):
     probe = Probe(paper_scene)
     atol = probe.ffi.new("double[8]")  # q, u, the works, the impulses
-    probe.m.state = probe.lib.MODEL_MACHINE_FREE
+    probe.m.tip.state = probe.lib.MODEL_MACHINE_FREE
     probe.lib.model_machine_atol(probe.m, probe.params, 1e-8, 1e-12, atol)
     assert list(atol)[:4] == [1e-12] * 4 and atol[4] > 1e-12  # the works: times a typical energy
     probe.lib.model_machine_start(probe.m, probe.params, 0.0, probe.y, 1)
-    probe.m.state = probe.lib.MODEL_MACHINE_ELASTIC
-    probe.m.scale[0] = probe.m.scale[1] = 1e-8
+    probe.m.tip.state = probe.lib.MODEL_MACHINE_ELASTIC
+    probe.m.tip.scale[0] = probe.m.tip.scale[1] = 1e-8
     probe.lib.model_machine_atol(probe.m, probe.params, 1e-8, 1e-12, atol)
     assert atol[0] == pytest.approx(1e-15)  # floored at the double precision of a tip height
     assert np.all(np.array(list(atol)) <= np.array([1e-12] * 4 + [np.inf] * 4))

@@ -124,7 +124,7 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
         n = 0;  /* the next call writes into emptied buffers */
         if (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL) continue;
         if (flag < 0) {
-            fprintf(stderr, "the integrator failed in %s at t = %g: %s\n", model_machine_state_name(m.state), r->t,
+            fprintf(stderr, "the integrator failed in %s at t = %g: %s\n", model_machine_state_name(m.tip.state), r->t,
                     ig_solver_message(s));
             r->status = "failed";
         }

@@ -346,18 +346,73 @@ static double chain_mass(const model_params *p)
     return p->m1 + p->m2;
 }
 
-/* Whether the tip at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
+/* ---- the contact points: the tip (point -1) and the joints (point k from 0) ---- */
+#define JOINTS 0
+#define POINT_EVENTS MODEL_NEVENT  /* each point's events, in the tip's order */
+/* a point's machine (const as m is) */
+#define RECORD(m, point) ((void)(point), &(m)->tip)
+
+/* A point's contact in the parameters, as the machine sets it: the tip's own fields (p->phase,
+ * p->y_s, ...) or joint k's in p->joint[k], of the same names. */
+typedef struct {
+    int *phase;
+    double *y_s, *delta_m;
+    double *delta_r, *R_res;
+    double R;  /* its contact radius */
+} point_contact;
+
+#define CONTACT_OF(c) {&(c)->phase, &(c)->y_s, &(c)->delta_m, &(c)->delta_r, &(c)->R_res, (c)->R}
+
+static point_contact contact_of(model_params *p, int point)
+{
+    (void)point;
+    const point_contact tip = CONTACT_OF(p);
+    return tip;
+}
+#undef CONTACT_OF
+
+/* A point's outputs: the tip's (MODEL_OUT_delta, MODEL_OUT_v_Bx, ...) or joint k's
+ * (MODEL_OUT_JOINT(k, MODEL_POINT_*)). */
+typedef struct {
+    double delta, delta_rate, v_x, v_y, F, F_f;
+} point_outputs;
+
+static point_outputs outputs_at(const double *out, int point)
+{
+    (void)point;
+    const point_outputs tip = {out[MODEL_OUT_delta], out[MODEL_OUT_delta_rate], out[MODEL_OUT_v_Bx],
+                               out[MODEL_OUT_v_By], out[MODEL_OUT_F], out[MODEL_OUT_F_f]};
+    return tip;
+}
+
+/* The parameters as a point sees them: the tip's are p; joint k's, its contact state and the
+ * constants of its radius in the tip's fields (model_joint_params), written to *buf. */
+static const model_params *as_seen(const model_params *p, int point, model_params *buf)
+{
+    (void)point;
+    (void)buf;
+    return p;
+}
+
+/* d2(delta)/dt2 of a point at y, given ydot = dy/dt. */
+static double delta_acceleration_at(int point, const double *y, const double *ydot, const model_params *p)
+{
+    (void)point;
+    return model_delta_acceleration(y, ydot, p);
+}
+
+/* Whether a point at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
  * the free chain pulls it into the surface (d2(delta)/dt2 beyond rounding of g): a resting or
  * grazing contact, which no crossing of the contact event would announce. */
-static int pulled_in(const model_params *p, double t, const double *y, const double *out)
+static int pulled_in(const model_params *p, int point, double t, const double *y, const double *out)
 {
-    const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
-    if (fabs(out[MODEL_OUT_delta_rate]) > MODEL_TANGENTIAL_TOLERANCE * tip_speed) return 0;
+    const point_outputs o = outputs_at(out, point);
+    if (fabs(o.delta_rate) > MODEL_TANGENTIAL_TOLERANCE * (fabs(o.v_x) + fabs(o.v_y))) return 0;
     model_params free_flight = *p;
     double ydot[MODEL_NSTATE];
-    free_flight.phase = MODEL_PHASE_FREE;
+    *contact_of(&free_flight, point).phase = MODEL_PHASE_FREE;
     if (model_rhs(t, y, ydot, &free_flight) != 0) return 0;
-    return model_delta_acceleration(y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
+    return delta_acceleration_at(point, y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
 }
 
 /* The state scales of an impact at a point of contact radius R approaching at v_n with speed
@@ -387,24 +442,65 @@ static void impact_scales(const model_params *p, double R, double v_x, double v_
     for (int i = 4; i < MODEL_NSTATE; ++i) scale[i] = energy;
 }
 
-/* A new impact at (t, y), whose outputs under the force law so far are `out`. */
-static void impact_begins(model_machine *m, model_params *p, double t, const double *y,
+/* A new impact of a point at (t, y), whose outputs under the force laws so far are `out`. */
+static void impact_begins(model_machine *m, model_params *p, int point, double t, const double *y,
                           const double *out, int into_dent)
 {
-    m->impacts += 1;
-    m->t_prev_start = m->t_start;
-    m->t_prev_end = m->t_end;
-    m->t_start = t;
-    m->t_end = NAN;
+    model_point_machine *r = RECORD(m, point);
+    const point_contact c = contact_of(p, point);
+    const point_outputs o = outputs_at(out, point);
+    r->impacts += 1;
+    r->t_prev_start = r->t_start;
+    r->t_prev_end = r->t_end;
+    r->t_start = t;
+    r->t_end = NAN;
     if (!into_dent) {  /* a new impact on the undeformed surface (back into its own dent: its law kept) */
-        m->delta_max = m->P_max = m->delta_r = 0.0;
-        m->R_res = p->R;
-        p->delta_m = 0.0;
-        p->delta_r = 0.0;
-        p->R_res = p->R;
+        r->delta_max = r->P_max = r->delta_r = 0.0;
+        r->R_res = c.R;
+        *c.delta_m = 0.0;
+        *c.delta_r = 0.0;
+        *c.R_res = c.R;
     }
-    const double v_Bx = out[MODEL_OUT_v_Bx], v_By = out[MODEL_OUT_v_By];
-    impact_scales(p, p->R, v_Bx, v_By, fmax(out[MODEL_OUT_delta_rate], 0.0), out[MODEL_OUT_T], y, m->scale);
+    impact_scales(p, c.R, o.v_x, o.v_y, fmax(o.delta_rate, 0.0), out[MODEL_OUT_T], y, r->scale);
+}
+
+/* Set a point free before its first contact, on the surface at the tip's level p->y_s. */
+static void starts_free(model_machine *m, model_params *p, int point)
+{
+    model_point_machine *r = RECORD(m, point);
+    const point_contact c = contact_of(p, point);
+    r->state = r->was = MODEL_MACHINE_FREE;
+    r->t_start = r->t_end = r->t_prev_start = r->t_prev_end = NAN;
+    r->slip = r->was_slip = 1.0;  /* free flight: no friction, whatever the state */
+    r->stick_excess = -INFINITY;
+    r->R_res = c.R;
+    for (int i = 0; i < MODEL_NSTATE; ++i) r->scale[i] = 1.0;
+    *c.phase = MODEL_PHASE_FREE;
+    *c.y_s = p->y_s;
+    *c.delta_m = 0.0;
+    *c.delta_r = 0.0;
+    *c.R_res = c.R;
+}
+
+/* How a free point starts at (t, y), with the outputs `out`: touching and pressing in, or
+ * (running to a time) touching with no normal speed but pulled into the surface (the free
+ * flight's d2(delta)/dt2 beyond rounding of g: a resting or grazing start), its impact begins
+ * now: MODEL_START_CONTACT; else MODEL_START_ALONG or _AWAY when touching, _FREE when not. */
+static int starts_at(model_machine *m, model_params *p, int point, double t, const double *y,
+                     const double *out)
+{
+    const point_outputs o = outputs_at(out, point);
+    const int touching = o.delta >= -MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
+    double rate = o.delta_rate;
+    if (fabs(rate) <= MODEL_TANGENTIAL_TOLERANCE * (fabs(o.v_x) + fabs(o.v_y))) rate = 0.0;  /* a tangential start */
+    if (touching && (rate > 0.0 || (m->run_to_time && pulled_in(p, point, t, y, out)))) {
+        impact_begins(m, p, point, t, y, out, 0);
+        RECORD(m, point)->state = MODEL_MACHINE_ELASTIC;
+        *contact_of(p, point).phase = law_of(MODEL_MACHINE_ELASTIC);
+        return MODEL_START_CONTACT;
+    }
+    if (!touching) return MODEL_START_FREE;
+    return rate == 0.0 ? MODEL_START_ALONG : MODEL_START_AWAY;
 }
 
 int model_machine_start(model_machine *m, model_params *p, double t, const double *y,
@@ -413,38 +509,17 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     double out[MODEL_NOUT];
     memset(m, 0, sizeof *m);
     m->run_to_time = run_to_time;
-    m->stick_excess = -INFINITY;
-    m->t_start = m->t_end = m->t_prev_start = m->t_prev_end = NAN;
-    m->slip = 1.0;  /* free flight: no friction, whatever the state */
-    m->R_res = p->R;
-    m->state = MODEL_MACHINE_FREE;
-    p->phase = MODEL_PHASE_FREE;
-    p->delta_m = 0.0;
-    p->delta_r = 0.0;
-    p->R_res = p->R;
     p->y_s = p->surface_height;
-    model_outputs(t, y, out, p);
     if (p->surface_initial != 0.0) {  /* the surface is where the tip starts */
-        p->y_s = out[MODEL_OUT_y_B];
         model_outputs(t, y, out, p);
+        p->y_s = out[MODEL_OUT_y_B];
     }
-    for (int i = 0; i < MODEL_NSTATE; ++i) m->scale[i] = 1.0;
-    const double delta = out[MODEL_OUT_delta];
-    double rate = out[MODEL_OUT_delta_rate];
-    const int touching = delta >= -MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
-    const double tip_speed = fabs(out[MODEL_OUT_v_Bx]) + fabs(out[MODEL_OUT_v_By]);
-    if (fabs(rate) <= MODEL_TANGENTIAL_TOLERANCE * tip_speed) rate = 0.0;  /* a tangential start */
-    /* resting or grazing, running to a time: no normal speed, but pulled into the surface (the
-     * free flight's d2(delta)/dt2 beyond rounding of g): the contact starts as if pressing in
-     * (to the first separation, such a start is no impact: MODEL_START_ALONG) */
-    if (touching && (rate > 0.0 || (run_to_time && pulled_in(p, t, y, out)))) {
-        impact_begins(m, p, t, y, out, 0);
-        m->state = MODEL_MACHINE_ELASTIC;
-        p->phase = law_of(m->state);
-        return MODEL_START_CONTACT;
-    }
-    if (touching && !run_to_time) return rate == 0.0 ? MODEL_START_ALONG : MODEL_START_AWAY;
-    return MODEL_START_FREE;
+    for (int point = -1; point < JOINTS; ++point) starts_free(m, p, point);
+    model_outputs(t, y, out, p);
+    const int start = starts_at(m, p, -1, t, y, out);
+    /* touching, not pressing in: no impact in a run to the first separation (a resting start
+     * is MODEL_START_ALONG); a run to a time waits for one */
+    return run_to_time && start != MODEL_START_CONTACT ? MODEL_START_FREE : start;
 }
 
 #define WATCH(e, d) (events[k] = (e), directions[k] = (d), ++k)
@@ -485,7 +560,7 @@ static int watch_state(int state, int base, int *events, int *directions)
 
 int model_machine_events(const model_machine *m, int *events, int *directions)
 {
-    int k = watch_state(m->state, 0, events, directions);
+    int k = watch_state(m->tip.state, 0, events, directions);
     return k;
 }
 #undef WATCH
@@ -510,69 +585,82 @@ static int next_state(int state, const int *has, const model_params *p)
     }
 }
 
-static int tip_switch(model_machine *m, model_params *p, double t, const double *y, const int *has,
-                      int contact_fired, int slip_fired);
+/* A point's switch at (t, y) when its events in `has` (indexed as the tip's) fired, with the
+ * outputs `out` under the force laws that have been acting. */
+static int point_switch(model_machine *m, model_params *p, int point, const int *has, double t,
+                        const double *y, const double *out)
+{
+    model_point_machine *r = RECORD(m, point);
+    const point_contact c = contact_of(p, point);
+    const point_outputs o = outputs_at(out, point);
+    model_params seen;
+    const model_params *at = as_seen(p, point, &seen);
+    const int state = r->state;
+    int act = MODEL_ACT_RESTART;
+    r->was = state;
+    r->was_slip = r->slip;
+    int next = next_state(state, has, at);
+    if (state == MODEL_MACHINE_FREE) {
+        impact_begins(m, p, point, t, y, out, next == MODEL_MACHINE_RELOADING);
+        act |= MODEL_ACT_IMPACT_BEGIN | MODEL_ACT_TOLERANCES;
+    } else if (next == MODEL_MACHINE_RESTITUTION &&
+               (state == MODEL_MACHINE_ELASTIC || state == MODEL_MACHINE_ELASTOPLASTIC)) {
+        const double delta_max = o.delta, P_m = o.F;
+        const double delta_r = residual_deformation(delta_max, at);
+        const double R_res = unloading_radius(delta_max, P_m, delta_r, at);
+        *c.delta_r = delta_r;
+        *c.R_res = R_res;
+        *c.delta_m = delta_max;
+        r->delta_max = delta_max;
+        r->P_max = P_m;
+        r->delta_r = delta_r;
+        r->R_res = R_res;
+        act |= MODEL_ACT_MAX_COMPRESSION;
+    }
+    if (next == MODEL_MACHINE_FREE && state == MODEL_MACHINE_RESTITUTION && pulled_in(p, point, t, y, out)) {
+        /* a grazing separation: the point leaves the dent with no normal speed but is pulled
+         * back in, so the contact event (delta rising through 0) would never fire: it reloads */
+        next = MODEL_MACHINE_RELOADING;
+    }
+    if (next == MODEL_MACHINE_FREE) {
+        r->t_end = t;
+        act |= MODEL_ACT_IMPACT_END | MODEL_ACT_TOLERANCES;
+        for (int i = 0; i < MODEL_NSTATE; ++i) r->scale[i] = 1.0;  /* no impact's scales */
+        /* the tip's separation ends a run to separation;
+         * else the surface is where a point left it after resting on it */
+        if (point < 0 && !m->run_to_time) act |= MODEL_ACT_END;
+        else if (state == MODEL_MACHINE_SUSTAINED) *c.y_s -= o.delta;
+    }
+    r->state = next;
+    *c.phase = law_of(next);
+    r->act = act;
+    return act;
+}
 
 int model_machine_switch(model_machine *m, model_params *p, double t, const double *y,
                          const int *fired)
 {
     int events[MODEL_NEVENT], directions[MODEL_NEVENT];
     int has[MODEL_NEVENT] = {0};
+    int point_fired[1 + JOINTS] = {0};  /* [0] the tip, [k + 1] joint k */
+    double out[MODEL_NOUT];
     const int watched = model_machine_events(m, events, directions);
-    int contact_fired = 0, slip_fired = 0, act = 0;
-    m->stick_excess = -INFINITY;  /* a new segment follows */
-    m->stick_F = 0.0;
+    int act = 0;
+    for (int point = -1; point < JOINTS; ++point) {
+        model_point_machine *r = RECORD(m, point);
+        r->act = 0;
+        r->stick_excess = -INFINITY;  /* a new segment follows */
+        r->stick_F = 0.0;
+    }
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
-        ++contact_fired;
+        point_fired[events[k] / POINT_EVENTS] = 1;
     }
-    if (contact_fired + slip_fired != 0) act |= tip_switch(m, p, t, y, has, contact_fired, slip_fired);
-    return act;
-}
-
-/* The tip's switch, when its events in `has` fired. */
-static int tip_switch(model_machine *m, model_params *p, double t, const double *y, const int *has,
-                      int contact_fired, int slip_fired)
-{
-    (void)contact_fired;
-    (void)slip_fired;
-    double out[MODEL_NOUT];  /* under the force law that has been acting */
-    model_outputs(t, y, out, p);
-    const int state = m->state;
-    int act = MODEL_ACT_RESTART;
-    int next = next_state(state, has, p);
-    if (state == MODEL_MACHINE_FREE) {
-        impact_begins(m, p, t, y, out, next == MODEL_MACHINE_RELOADING);
-        act |= MODEL_ACT_IMPACT_BEGIN | MODEL_ACT_TOLERANCES;
-    } else if (next == MODEL_MACHINE_RESTITUTION &&
-               (state == MODEL_MACHINE_ELASTIC || state == MODEL_MACHINE_ELASTOPLASTIC)) {
-        const double delta_max = out[MODEL_OUT_delta], P_m = out[MODEL_OUT_F];
-        const double delta_r = residual_deformation(delta_max, p);
-        const double R_res = unloading_radius(delta_max, P_m, delta_r, p);
-        p->delta_r = delta_r;
-        p->R_res = R_res;
-        p->delta_m = delta_max;
-        m->delta_max = delta_max;
-        m->P_max = P_m;
-        m->delta_r = delta_r;
-        m->R_res = R_res;
-        act |= MODEL_ACT_MAX_COMPRESSION;
+    if (point_fired[0]) {  /* the tip, under the force laws that have been acting */
+        model_outputs(t, y, out, p);
+        act |= point_switch(m, p, -1, has, t, y, out);
     }
-    if (next == MODEL_MACHINE_FREE && state == MODEL_MACHINE_RESTITUTION && pulled_in(p, t, y, out)) {
-        /* a grazing separation: the tip leaves the dent with no normal speed but is pulled back
-         * in, so the contact event (delta rising through 0) would never fire: it reloads */
-        next = MODEL_MACHINE_RELOADING;
-    }
-    if (next == MODEL_MACHINE_FREE) {
-        m->t_end = t;
-        act |= MODEL_ACT_IMPACT_END | MODEL_ACT_TOLERANCES;
-        if (!m->run_to_time) act |= MODEL_ACT_END;
-        else if (state == MODEL_MACHINE_SUSTAINED) p->y_s -= out[MODEL_OUT_delta];  /* the surface is where the tip left it */
-        for (int i = 0; i < MODEL_NSTATE; ++i) m->scale[i] = 1.0;
-    }
-    m->state = next;
-    p->phase = law_of(next);
     return act;
 }
 
@@ -600,10 +688,12 @@ void model_machine_atol(const model_machine *m, const model_params *p, double rt
     const double energy = fmax(chain_mass(p) * fmax(p->g, 1.0) * chain_length(p), 1e-30);
     for (int i = 0; i < 4; ++i) atol_out[i] = atol;
     for (int i = 4; i < MODEL_NSTATE; ++i) atol_out[i] = atol * energy;
-    if (m->state != MODEL_MACHINE_FREE) {
-        /* inside an impact: rtol times its scales, never looser than in free flight */
-        for (int i = 0; i < 2; ++i) atol_out[i] = fmin(fmax(rtol * m->scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
-        for (int i = 2; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * m->scale[i], 1e-300));
+    for (int point = -1; point < JOINTS; ++point) {
+        /* inside a point's impact: rtol times its scales, never looser than outside it */
+        const model_point_machine *r = RECORD(m, point);
+        if (r->state == MODEL_MACHINE_FREE) continue;
+        for (int i = 0; i < 2; ++i) atol_out[i] = fmin(fmax(rtol * r->scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
+        for (int i = 2; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * r->scale[i], 1e-300));
     }
     /* the impulses follow the steps the other states set (with them in
      * the error test, the paper's impact took 68 steps instead of 59 for the same motion) */

@@ -32,8 +32,8 @@
 extern "C" {
 #endif
 
-#define MODEL_API_VERSION 1
-#define MODEL_STRUCTURE_HASH "24b295b458d59771"
+#define MODEL_API_VERSION 2
+#define MODEL_STRUCTURE_HASH "feee180d010a325f"
 
 /* Thresholds of the machine (codegen/machine.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */
@@ -81,24 +81,32 @@ enum {
 #define MODEL_PARAMS_OK (-1)
 #define MODEL_NPARAM 28
 
-/* The machine's state. Everything it decides lives here and in the parameters it sets
+/* A contact point's machine: the tip's (machine.tip) or a joint's (machine.joint[k]). Its force
+ * law and the values fixed at its switches are in the parameters: the tip's own fields
  * (phase, y_s, delta_m, delta_r, R_res). */
 typedef struct {
     int state;          /* MODEL_MACHINE_* */
-    int run_to_time;    /* 1: separation does not end the run; later impacts follow */
     int impacts;        /* impacts begun */
-    double slip;        /* exact Coulomb: +1 or -1 slipping along +x or -x, 0 stuck */
+    int was;            /* its state before its latest switch */
+    int act;            /* MODEL_ACT_* bits of its switch at the latest event (0: it had none) */
     double delta_max;   /* maximum compression of the current (or last) impact, m */
     double P_max;       /* force there, N */
     double delta_r;     /* its permanent deformation, m */
     double R_res;       /* its unloading radius, m */
+    double slip, was_slip;  /* exact Coulomb: +1 or -1 slipping along +x or -x, 0 stuck; and before its latest switch */
+    double stick_excess; /* exact Coulomb: the largest |F_f| - mu F while stuck in this segment, N */
+    double stick_F;      /* and the largest F there, N */
     double t_start;     /* start of the current (or last) impact, s */
     double t_end;       /* its end, s (NaN while it lasts) */
     double t_prev_start, t_prev_end;  /* the impact before it */
     double scale[MODEL_NSTATE];  /* typical size of each state in this impact (nominals) */
+} model_point_machine;
+
+/* The machine's state. Everything it decides lives here and in the parameters it sets. */
+typedef struct {
+    int run_to_time;    /* 1: separation does not end the run; later impacts follow */
     double side[MODEL_NEVENT];   /* last nonzero side of each event function (0: none yet) */
-    double stick_excess; /* exact Coulomb: the largest |F_f| - mu F of a stuck tip in this segment, N */
-    double stick_F;      /* and the largest F there, N */
+    model_point_machine tip;     /* the tip's contact */
 } model_machine;
 
 /* Parameters by index k < MODEL_NPARAM: the struct field, its scene key ("" when the

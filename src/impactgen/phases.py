@@ -51,7 +51,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
     start = session.begin(params, scene, solver)
-    state0 = m.state
+    state0 = m.tip.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         first_row, tallied = session.without_run()
         session.close()
@@ -69,11 +69,11 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
                          key=lambda impact: (impact.t_start, point_number(impact.point, n)))
     status, message = _status(lib, solver, machine, ran, impacts)
 
-    trajectory = partial(_trajectory, ran, state0, m.state, session.output_index, model.state_names)
+    trajectory = partial(_trajectory, ran, state0, m.tip.state, session.output_index, model.state_names)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
-        pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, m.state), params, sampler)
+        pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, m.tip.state), params, sampler)
         if dense_output:
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
     counters = session.counters()
@@ -176,7 +176,7 @@ def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: lis
     message = ran.message
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
-    return "failed", str(SolverError(message, STATES[machine.state.state], ran.t_last))
+    return "failed", str(SolverError(message, STATES[machine.state.tip.state], ran.t_last))
 
 
 def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, cuts: list[int],

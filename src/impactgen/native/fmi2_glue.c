@@ -396,26 +396,17 @@ fmi2Status fmi2Reset(fmi2Component comp)
 static double machine_value(const instance *c, int kind, int point)
 {
 #ifdef MODEL_NJOINT
-    if (point > 0) {
-        const model_joint_machine *j = &c->m.joint[point - 1];
-        switch (kind) {
-        case VAR_PHASE: return j->state;
-        case VAR_IMPACTS: return j->impacts;
-        case VAR_DELTA_MAX: return j->delta_max;
-        case VAR_DELTA_R: return j->delta_r;
-        case VAR_P_MAX: return j->P_max;
-        default: return NAN;
-        }
-    }
+    const model_point_machine *r = point > 0 ? &c->m.joint[point - 1] : &c->m.tip;
 #else
+    const model_point_machine *r = &c->m.tip;
     (void)point;
 #endif
     switch (kind) {
-    case VAR_PHASE: return c->m.state;
-    case VAR_IMPACTS: return c->m.impacts;
-    case VAR_DELTA_MAX: return c->m.delta_max;
-    case VAR_DELTA_R: return c->m.delta_r;
-    case VAR_P_MAX: return c->m.P_max;
+    case VAR_PHASE: return r->state;
+    case VAR_IMPACTS: return r->impacts;
+    case VAR_DELTA_MAX: return r->delta_max;
+    case VAR_DELTA_R: return r->delta_r;
+    case VAR_P_MAX: return r->P_max;
     default: return NAN;
     }
 }
@@ -613,16 +604,16 @@ static int handle_events(instance *c, const int *fired_by_integrator)
         int events[MODEL_NEVENT], directions[MODEL_NEVENT], tip_fired = 0;
         const int watched = model_machine_events(&c->m, events, directions);
         for (int k = 0; k < watched; ++k) tip_fired |= flags[k] && events[k] < FMU_NTIP_EVENT;
-        const int before = c->m.state;
+        const int before = c->m.tip.state;
         act = model_machine_switch(&c->m, &c->p, c->t, c->y, flags);
         if (act) {
             if (tip_fired) {
                 say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", c->t, model_machine_state_name(before),
-                    model_machine_state_name(c->m.state));
+                    model_machine_state_name(c->m.tip.state));
             }
 #ifdef MODEL_NJOINT
             for (int k = 0; k < MODEL_NJOINT; ++k) {  /* each joint that switched, by name */
-                const model_joint_machine *j = &c->m.joint[k];
+                const model_point_machine *j = &c->m.joint[k];
                 if (!j->act) continue;
                 say(c, fmi2OK, "logEvents", "t = %.17g: joint %d: %s -> %s", c->t, model_joint_number(k),
                     model_machine_state_name(j->was), model_machine_state_name(j->state));
@@ -730,7 +721,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t
     const int flag = model_rhs(c->t, c->y, derivatives, &c->p);
     if (flag != 0) {
         say(c, fmi2Error, "logStatusError", "the right-hand side is not finite at t = %g in phase %s%s", c->t,
-            model_machine_state_name(c->m.state),
+            model_machine_state_name(c->m.tip.state),
             flag < 0 ? ": the mass matrix is not positive definite (check chain.mass and chain.length)" : "");
         return fmi2Error;
     }
@@ -857,7 +848,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     if (flag < 0) {
         c->mode = FAILED;
         say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
-            model_machine_state_name(c->m.state), c->t_int, ig_solver_message(c->solver));
+            model_machine_state_name(c->m.tip.state), c->t_int, ig_solver_message(c->solver));
         return fmi2Error;
     }
     if (c->t_int < target) {  /* the run ended before the communication point */

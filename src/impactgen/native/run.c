@@ -55,6 +55,17 @@ static int under_floor(ig_solver *s, const model_params *p, double t, const doub
 #define SWITCH_RECORDS 1
 #endif
 
+/* A point's machine after its switch, in its switch record. */
+static void record_after(ig_segment *rec, const model_point_machine *r)
+{
+    rec->next_state = r->state;
+    rec->next_slip = r->slip;
+    rec->delta_max = r->delta_max;
+    rec->P_max = r->P_max;
+    rec->delta_r = r->delta_r;
+    rec->R_res = r->R_res;
+}
+
 #ifdef MODEL_NJOINT
 /* After a switch recorded in `seg`: a record of its own for each joint that switched there. */
 static int record_joints(const model_machine *m, const ig_segment *seg, ig_segment *segments, int segment_capacity,
@@ -62,7 +73,7 @@ static int record_joints(const model_machine *m, const ig_segment *seg, ig_segme
                          const double *out_buf)
 {
     for (int k = 0; k < MODEL_NJOINT; ++k) {
-        const model_joint_machine *j = &m->joint[k];
+        const model_point_machine *j = &m->joint[k];
         if (!j->act) continue;
         if (*n_segments >= segment_capacity) return 1;
         ig_segment *rec = &segments[(*n_segments)++];
@@ -70,13 +81,8 @@ static int record_joints(const model_machine *m, const ig_segment *seg, ig_segme
         rec->point = model_joint_number(k);
         rec->state = j->was;
         rec->slip = j->was_slip;
-        rec->next_slip = j->slip;
         rec->act = j->act;
-        rec->next_state = j->state;
-        rec->delta_max = j->delta_max;
-        rec->P_max = j->P_max;
-        rec->delta_r = j->delta_r;
-        rec->R_res = j->R_res;
+        record_after(rec, j);
         if (tally) ig_tally_segment(tally, rec, t_buf, y_buf, out_buf);
     }
     return 0;
@@ -156,8 +162,8 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         ig_segment *seg = &segments[(*n_segments)++];
         seg->t = *t;
         seg->sample = *n_written - 1;
-        seg->state = m->state;
-        seg->slip = m->slip;
+        seg->state = m->tip.state;
+        seg->slip = m->tip.slip;
         seg->params = *p;
         seg->event = -1;
         seg->act = 0;
@@ -167,12 +173,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
             }
             seg->act = model_machine_switch(m, p, *t, y, roots_found);
         }
-        seg->next_state = m->state;  /* the machine after the switch (as it was, at t_stop) */
-        seg->next_slip = m->slip;
-        seg->delta_max = m->delta_max;
-        seg->P_max = m->P_max;
-        seg->delta_r = m->delta_r;
-        seg->R_res = m->R_res;
+        record_after(seg, &m->tip);  /* the machine after the switch (as it was, at t_stop) */
         seg->point = MODEL_NQ;
         if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
 #ifdef MODEL_NJOINT
