@@ -95,7 +95,9 @@ def material_constants() -> tuple[tuple[sm.Symbol, sm.Expr], ...]:
     spare the elasto-plastic law work per call: 1/delta_c and theta_c)."""
     weaker_rod = S_y_rod <= S_y_surface
     return (
-        (E_star, E_rod * E_surface / (E_surface * (1 - nu_rod ** 2) + E_rod * (1 - nu_surface ** 2))),
+        # Eq. 7 as it is written: a sum of compliances, finite for any modulus a double holds
+        # (the product of two moduli overflows from 1e154 on: a rigid surface of E = 1e300)
+        (E_star, 1 / ((1 - nu_rod ** 2) / E_rod + (1 - nu_surface ** 2) / E_surface)),
         (R, R_tip),  # 1/R = 1/R_tip + 1/R_surface, with R_surface infinite for a flat
         (S_y, sm.Piecewise((S_y_rod, weaker_rod), (S_y_surface, True))),
         (nu, sm.Piecewise((nu_rod, weaker_rod), (nu_surface, True))),

@@ -156,3 +156,19 @@ def test_a_read_only_cache_without_the_model_is_exit_3_naming_the_folder():
     assert res.returncode == 3, res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
     assert str(cache) in res.stderr and "IMPACTGEN_CACHE_DIR" in res.stderr and "lacks this model" in res.stderr
+
+
+def test_a_rigid_surface_of_any_modulus_gives_the_same_impact_in_both_engines():
+    """Eq. 7 is computed as a sum of compliances: a surface of E = 1e300 Pa is a rigid one
+    (E* of the rod alone), not an overflow; two such moduli leave no contact constants
+    double precision can hold, and both engines say so, naming the modulus."""
+    rigid = impactgen.load_scene("paper", {"surface.E": 1e300, "solver.sustained_contact": False})
+    c, ref = impactgen.simulate(rigid), impactgen.simulate(rigid, engine="reference")
+    assert c.status == ref.status == "ok"
+    assert c.summary["delta_max"] == pytest.approx(ref.summary["delta_max"], rel=1e-6)
+    assert isinstance(c.warnings, list)
+    both = rigid.replace({"rod.E": 1e300})
+    for engine in ("c", "reference"):
+        with pytest.raises(SceneError, match="double precision") as err:
+            impactgen.simulate(both, engine=engine)
+        assert err.value.key == "rod.E"

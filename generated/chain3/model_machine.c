@@ -271,10 +271,21 @@ int model_check(const model_params *p, const char **range_text)
     return MODEL_PARAMS_OK;
 }
 
+/* The derived constants a force law divides by or multiplies with are finite and above 0:
+ * not so for moduli beyond double precision's range (two of 1e300 Pa give delta_c = 0). */
+static int derived_in_range(const model_params *p)
+{
+    return p->E_star > 0.0 && isfinite(p->E_star) &&
+           p->delta_c > 0.0 && isfinite(p->delta_c) &&
+           p->inv_delta_c > 0.0 && isfinite(p->inv_delta_c) &&
+           p->P_c > 0.0 && isfinite(p->P_c);
+}
+
 int model_derive(model_params *p, const char **range_text)
 {
     const int bad = model_check(p, range_text);
     if (bad != MODEL_PARAMS_OK) return bad;
+    int in_range = 1;
     const double E_rod = p->E_rod;
     const double nu_rod = p->nu_rod;
     const double S_y_rod = p->S_y_rod;
@@ -282,7 +293,7 @@ int model_derive(model_params *p, const char **range_text)
     const double E_surface = p->E_surface;
     const double nu_surface = p->nu_surface;
     const double S_y_surface = p->S_y_surface;
-    const double E_star = E_rod*E_surface/(E_rod*(1 - (nu_surface*nu_surface)) + E_surface*(1 - (nu_rod*nu_rod)));
+    const double E_star = (1.0/((1 - (nu_surface*nu_surface))/E_surface + (1 - (nu_rod*nu_rod))/E_rod));
     const double R = R_tip;
     const double S_y = (S_y_rod <= S_y_surface ? S_y_rod : S_y_surface);
     const double nu = (S_y_rod <= S_y_surface ? nu_rod : nu_surface);
@@ -303,6 +314,11 @@ int model_derive(model_params *p, const char **range_text)
     (void)S_y;
     (void)nu;
 
+    in_range &= derived_in_range(p);
+    if (!in_range) {  /* named by the larger modulus */
+        if (range_text) *range_text = "(the contact constants E*, delta_c and P_c it gives leave double precision's range)";
+        return p->E_rod >= p->E_surface ? 7 : 11;
+    }
     return MODEL_PARAMS_OK;
 }
 

@@ -186,8 +186,12 @@ class Contact:
         C_j = 1.295 * math.exp(0.736 * weak.nu)
         R = scene.tip_radius if radius is None else radius
         p0 = math.pi * C_j * weak.yield_strength / 2  # the pressure scale pi C_j S_y / 2
-        return cls(E_star=E_star, R=R, delta_c=R * (p0 / E_star) ** 2,
-                   P_c=4.0 / 3.0 * (R / E_star) ** 2 * p0 ** 3, C_j=C_j,
+        delta_c, P_c = R * (p0 / E_star) ** 2, 4.0 / 3.0 * (R / E_star) ** 2 * p0 ** 3
+        if not all(0 < v < math.inf for v in (E_star, delta_c, P_c)):  # the laws divide by them
+            key, value = ("rod.E", Er) if Er >= Es else ("surface.E", Es)
+            raise SceneError(key, f"{value!r} is outside its physical range (the contact constants E*, delta_c "
+                                  "and P_c it gives leave double precision's range)")
+        return cls(E_star=E_star, R=R, delta_c=delta_c, P_c=P_c, C_j=C_j,
                    B=0.14 * math.exp(23 * weak.yield_strength / E_star),
                    mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
                    plastic=scene.contact.model == "three-phase", R_res=R,

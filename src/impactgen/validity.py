@@ -111,6 +111,8 @@ def validity_warnings(scene: Scene, impacts, contact: Mapping[str, YieldScale] |
             c = constants.get(impact.point)
             if c is None:
                 c = constants[impact.point] = point_constants(scene, impact.point)
+            if not c.delta_c > 0:  # moduli beyond double precision's range: the run failed, and says why
+                continue
             w = impact.delta_max / c.delta_c
             if impact.delta_max >= YIELD_ONSET * c.delta_c:
                 a = contact_radius(impact.delta_max, c)
