@@ -180,3 +180,17 @@ def test_every_point_has_its_own_works_impulses_and_coefficients():
         assert sum(i.W_friction_point for i in own) == pytest.approx(works["W_friction"], rel=1e-9)
     first_tip = next(i for i in result.impacts if i.point == "tip")
     assert result.summary["coefficients"]["e_N"] == pytest.approx(first_tip.e_N, rel=1e-12)
+
+
+@pytest.mark.parametrize("mu", [0.3, 0.5])
+def test_each_points_stick_slip_records_follow_on_from_each_other(mu):
+    """Every stick-slip switch of a point starts from where its last one left it, also when
+    the switch of another point releases it (a stuck point pushed beyond mu F): at mu 0.3
+    and 0.5 joint 2 is released so at 0.60 s and 0.53 s, and its record named the state of
+    an earlier switch."""
+    scene = impactgen.load_scene("paper", {**JOINT_LANDS, "solver.t_end": 0.7, "contact.friction_mode": "coulomb",
+                                           "contact.friction": mu})
+    result = impactgen.simulate(scene, record_steps=False)
+    assert result.status == "ok", result.message
+    links = [(a, b) for impact in result.impacts for a, b in zip(impact.stick_slip, impact.stick_slip[1:])]
+    assert len(links) > 30 and all(a[2] == b[1] for a, b in links), [(a, b) for a, b in links if a[2] != b[1]]

@@ -631,8 +631,6 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
     const model_params *at = as_seen(p, point, &seen);
     const int state = r->state;
     int act = MODEL_ACT_RESTART;
-    r->was = state;
-    r->was_slip = r->slip;
     int next = next_state(state, has, at);
     if (state == MODEL_MACHINE_FREE) {
         impact_begins(m, p, point, t, y, out, next == MODEL_MACHINE_RELOADING);
@@ -683,6 +681,8 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     for (int point = -1; point < JOINTS; ++point) {
         model_point_machine *r = RECORD(m, point);
         r->act = 0;
+        r->was = r->state;  /* what its record names as before the switch, whatever changes it */
+        r->was_slip = r->slip;
         r->stick_excess = -INFINITY;  /* a new segment follows */
         r->stick_F = 0.0;
     }
