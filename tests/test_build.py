@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -29,14 +30,28 @@ def test_same_structure_reuses_the_loaded_model():
     assert compile_model(SPEC) is compile_model(SPEC)
 
 
-def test_a_new_process_loads_the_cache_without_rebuilding(tmp_path):
-    first = _compile_in_subprocess(tmp_path)
+@pytest.fixture(scope="module")
+def built_cache(tmp_path_factory) -> Path:
+    """A cache folder that a process of its own built SPEC into (never changed: copy it to
+    change it)."""
+    cache = tmp_path_factory.mktemp("built-cache")
+    first = _compile_in_subprocess(cache)
     out, err = first.communicate(timeout=300)
     assert first.returncode == 0, err
-    entry = Path(out.strip())
+    assert Path(out.strip()).parent == cache
+    return cache
+
+
+def _entry(cache: Path) -> Path:
+    (entry,) = [p for p in cache.iterdir() if p.is_dir()]
+    return entry
+
+
+def test_a_new_process_loads_the_cache_without_rebuilding(built_cache):
+    entry = _entry(built_cache)
     library = entry / json.loads((entry / "manifest.json").read_text())["library"]
     stamp = library.stat().st_mtime_ns
-    second = _compile_in_subprocess(tmp_path)
+    second = _compile_in_subprocess(built_cache)
     out2, err2 = second.communicate(timeout=300)
     assert second.returncode == 0, err2
     assert Path(out2.strip()) == entry and library.stat().st_mtime_ns == stamp
@@ -68,18 +83,19 @@ def test_concurrent_builds_of_one_model_all_succeed(tmp_path):
     assert not list(tmp_path.glob("*.tmp-*"))  # no half-built folder left behind
 
 
-def test_corrupted_library_is_rebuilt(tmp_path, monkeypatch):
-    monkeypatch.setenv("IMPACTGEN_CACHE_DIR", str(tmp_path))
-    proc = _compile_in_subprocess(tmp_path)
-    out, _ = proc.communicate(timeout=300)
-    entry = Path(out.strip())
+def test_corrupted_library_is_rebuilt(built_cache, tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    shutil.copytree(built_cache, cache)  # a process's build, to corrupt
+    monkeypatch.setenv("IMPACTGEN_CACHE_DIR", str(cache))
+    entry = _entry(cache)
+    assert build._valid(entry) is not None
     manifest = json.loads((entry / "manifest.json").read_text())
     (entry / manifest["library"]).write_bytes(b"not a shared library")
     assert build._valid(entry) is None
-    proc = _compile_in_subprocess(tmp_path)
+    proc = _compile_in_subprocess(cache)
     out, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err
-    assert build._valid(entry) is not None
+    assert Path(out.strip()) == entry and build._valid(entry) is not None
 
 
 def test_missing_sundials_says_how_to_install(monkeypatch):

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 import impactgen
-from conftest import PAPER, ROOT
+from conftest import PAPER, ROOT, early_run, start_early
 
 SANITIZED = bool(os.environ.get("IMPACTGEN_SANITIZE"))
 CC = shutil.which("cc") or shutil.which("gcc")
@@ -45,14 +45,20 @@ def test_thousand_simulations_do_not_grow_memory(paper_scene):
     assert growth < 4 * 2**20, f"resident memory grew by {growth / 2**20:.1f} MiB"
 
 
+def _sanitize_command() -> dict:
+    return {"args": ["bash", str(ROOT / "scripts" / "sanitize.sh"), "-k",
+                     "matches_the_paper or no_phase_ends or free_flight or hertz_model or stuck_tip "
+                     "or static_equilibrium or t_eval_samples or partial_trajectory or explicit_pair"],
+            "timeout": 900, "env": {**os.environ, "PYTHON": sys.executable}}
+
+
+# about a minute of compiling and running under the sanitizers, in a cache and a folder of its
+# own: started at the end of the collection, beside the tests before this one
 @pytest.mark.skipif(SANITIZED or not _asan_available(),
                     reason="already under the sanitizers, or no AddressSanitizer runtime")
-def test_glue_and_simulations_are_clean_under_sanitizers():
-    res = subprocess.run(["bash", str(ROOT / "scripts" / "sanitize.sh"), "-k",
-                          "matches_the_paper or no_phase_ends or free_flight or hertz_model or stuck_tip "
-                          "or static_equilibrium or t_eval_samples or partial_trajectory or explicit_pair"],
-                         capture_output=True, text=True, timeout=900,
-                         env={**os.environ, "PYTHON": sys.executable})
+@start_early(_sanitize_command)
+def test_glue_and_simulations_are_clean_under_sanitizers(request):
+    res = early_run(request.node, _sanitize_command)
     output = res.stdout + res.stderr
     assert res.returncode == 0, output[-4000:]
     assert "ok (0 failures)" in output
