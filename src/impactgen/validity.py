@@ -106,11 +106,10 @@ def validity_warnings(scene: Scene, impacts, contact: Mapping[str, YieldScale] |
                     f"position's resolution rtol * sum(L) = {resolution:.1g} m: the energy budget closes "
                     "only to about (resolution / delta_max)^2 of T0; tighten solver.rtol"))
     if impacts and scene.contact.model == "three-phase":
-        constants = dict(contact) if contact else {}
         for k, impact in enumerate(impacts, start=1):
-            c = constants.get(impact.point)
-            if c is None:
-                c = constants[impact.point] = point_constants(scene, impact.point)
+            c = contact.get(impact.point) if contact else None
+            if c is None:  # (laws' constants are cached by material and radius)
+                c = point_constants(scene, impact.point)
             if not c.delta_c > 0:  # moduli beyond double precision's range: the run failed, and says why
                 continue
             w = impact.delta_max / c.delta_c
