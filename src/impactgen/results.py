@@ -503,17 +503,13 @@ class SimulationResult:
         "W_friction": ...}, "joint 2": {...}}, the points with contact code only. They add up
         to the run's W_normal and W_friction (the energy budget's terms)."""
         traj = self.trajectory
-        first, last = traj.states_at(0), traj.states_at(len(traj.t) - 1)
-        tip = {"W_normal": last["W_normal"] - first["W_normal"],
-               "W_friction": last.get("W_friction", 0.0) - first.get("W_friction", 0.0)}
+        joints = [int(name.rsplit("_J", 1)[1]) for name in traj.state_names if name.startswith("W_normal_J")]
         works = {}
-        for name in traj.state_names:
-            if name.startswith("W_") and "_J" in name:  # W_normal_J2: joint 2's own
-                kind, joint = name.rsplit("_J", 1)
-                point = works.setdefault(point_name(int(joint), self.n), {"W_normal": 0.0, "W_friction": 0.0})
-                point[kind] = last[name] - first[name]
-                tip[kind] -= point[kind]
-        return {"tip": tip, **works}
+        for point in ("tip", *(point_name(joint, self.n) for joint in joints)):
+            first, last = _own_integrals(traj, 0, point), _own_integrals(traj, len(traj.t) - 1, point)
+            works[point] = {"W_normal": last["W_normal"] - first["W_normal"],
+                            "W_friction": last.get("W_friction", 0.0) - first.get("W_friction", 0.0)}
+        return works
 
     @property
     def W_friction(self) -> np.ndarray:
