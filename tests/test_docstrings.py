@@ -9,9 +9,12 @@ import impactgen.compare
 import impactgen.engines
 import impactgen.results
 import impactgen.scene
+import impactgen.scene.loading
+import impactgen.scene.model
 
 
-@pytest.mark.parametrize("module", [impactgen.engines, impactgen.results, impactgen.scene, impactgen.compare])
+@pytest.mark.parametrize("module", [impactgen.engines, impactgen.results, impactgen.scene,
+                                    impactgen.scene.loading, impactgen.scene.model, impactgen.compare])
 def test_docstring_examples(module):
     failures, tried = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert tried > 0 and failures == 0

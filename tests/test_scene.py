@@ -190,7 +190,8 @@ def test_checking_many_values_refuses_exactly_what_checking_each_refuses():
 def test_the_keys_that_rerun_the_cross_key_checks_are_scene_keys():
     """scene_with skips the cross-key checks when no key they read changed; a misspelt key
     in that list would skip them for good."""
-    from impactgen.scene import _CROSS_CHECKED, split_key
+    from impactgen.scene import split_key
+    from impactgen.scene.updates import _CROSS_CHECKED
     for name in _CROSS_CHECKED:
         split_key(name)
 

@@ -1,0 +1,218 @@
+"""The checked scene as frozen dataclasses: the chain, the two materials, the contact, the
+solver settings, and the Scene that holds them (read by the same dotted keys as the file)."""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+from ..errors import SceneError
+from .schema import SCHEMA, all_keys, split_key
+
+@dataclass(frozen=True)
+class Material:
+    """Elastic and yield properties of one body in contact."""
+
+    E: float
+    nu: float
+    yield_strength: float
+
+
+@dataclass(frozen=True)
+class Chain:
+    links: int
+    length: tuple[float, ...]
+    mass: tuple[float, ...]
+    gravity: float
+
+
+@dataclass(frozen=True)
+class Contact:
+    model: str
+    friction: float
+    friction_mode: str
+    friction_eps: float
+    # contact.joint_radius as given, one per joint (n - 1); None: every joint has the tip's radius
+    joint_radius: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Solver:
+    method: str
+    jacobian: str  # "analytic" | "difference" (auto resolved by the method)
+    rtol: float
+    atol: float
+    t_end: float | None  # None: stop at the first separation
+    t_max: float  # longest free flight to wait for a first contact when t_end is None
+    max_steps: int
+    sustained_contact: bool = True  # with t_end a time: hold the tip once impacts chatter
+    jacobian_setting: str = "auto"  # the key as given, before "auto" was resolved into `jacobian`
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A checked scene. Angles are radians; `surface_height` None means 'initial'."""
+
+    name: str
+    chain: Chain
+    rod: Material
+    tip_radius: float
+    surface: Material
+    surface_height: float | None
+    contact: Contact
+    q0: tuple[float, ...]
+    u0: tuple[float, ...]
+    solver: Solver
+    source: str = field(default="<memory>", compare=False)
+
+    @property
+    def n(self) -> int:
+        return self.chain.links
+
+    @property
+    def joint_radii(self) -> tuple[float, ...]:
+        """The contact radius of every joint (the end of link k, k = 1..n-1), in m: n - 1
+        values, the tip radius where `contact.joint_radius` is not given (empty for one link)."""
+        given = self.contact.joint_radius
+        return given if given is not None else (self.tip_radius,) * (self.n - 1)
+
+    # Read by key, not iterated: `for x in scene` would walk integer "keys".
+    __iter__ = None
+
+    def __getitem__(self, key: str) -> Any:
+        """The value of a scene key, named as in the scene file, `--set` and `overrides`.
+
+        Parameters
+        ----------
+        key : str
+            A dotted key (``"surface.height"``), or one element of a per-link or per-joint
+            list, counted from 1 (``"initial.u[2]"``).
+
+        Returns
+        -------
+        Any
+            The value as the scene file states it: a number, a string (``"initial"``,
+            ``"separation"``, a choice) or a list (one number per link or joint, also where the
+            file gave one number for all). ``initial.q`` is in radians, ``initial.q_deg`` the same
+            angles in degrees; ``contact.joint_radius`` the joints' radii, the tip's where the
+            file gives none; ``solver.jacobian`` the setting as given (``"auto"``).
+
+        Raises
+        ------
+        SceneError
+            The key is unknown (with the closest key, as `--set` says it), or the element is out
+            of range.
+
+        Examples
+        --------
+        >>> import impactgen
+        >>> scene = impactgen.load_scene("paper")
+        >>> scene["surface.height"], scene["initial.u[2]"], scene["rod.tip_radius"]
+        ('initial', -0.2, 0.005)
+        """
+        if not isinstance(key, str):
+            raise SceneError(None, f"a scene key is a dotted string such as 'surface.height' or 'initial.u[2]', "
+                                   f"got {type(key).__name__} {key!r:.60}")
+        section, name, index = split_key(key)
+        value = _whole_value(self, section, name)
+        if index is None:
+            return value
+        if index > len(value):
+            per = "joint" if SCHEMA[section][name].kind == "joint_floats" else "link"
+            raise SceneError(key, f"index {index} is out of range: {section}.{name} has {len(value)} elements "
+                                  f"(one per {per}, numbered from 1)")
+        return value[index - 1]
+
+    def get(self, key: str) -> Any:
+        """The value of a scene key: the same as ``scene[key]``. A checked scene has a value
+        for every key, so there is no default: an unknown key raises `SceneError`."""
+        return self[key]
+
+    def keys(self) -> tuple[str, ...]:
+        """Every key the scene can be read (and changed) by, without element indices."""
+        return tuple(all_keys())
+
+    def replace(self, overrides: Mapping[str, Any] | None = None, **fields: Any) -> "Scene":
+        """A new scene with some values changed, checked like `load_scene`.
+
+        Parameters
+        ----------
+        overrides : mapping, optional
+            Dotted scene keys to new values, as in `load_scene` (``{"initial.u[2]": -0.3}``).
+        **fields
+            Whole fields of the dataclass (``solver=dataclasses.replace(scene.solver, ...)``).
+
+        Returns
+        -------
+        Scene
+            The checked scene. A change that leaves it inconsistent (three links with two
+            initial angles, a tip inside the surface) raises `SceneError` naming the key.
+        """
+        from .loading import scene_from_dict
+        from .overrides import checked_overrides
+        from .updates import check_fields, scene_with
+        overrides = checked_overrides(overrides)
+        if fields:  # whole fields: the scene they make is read in full
+            check_fields(self, fields)
+            changed = dataclasses.replace(self, **fields)
+            return scene_from_dict(changed.to_dict(), overrides, source=self.source)
+        return scene_with(self, overrides)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as nested dicts of plain values, as a TOML file states it (angles in
+        radians): `scene_from_dict(scene.to_dict())` gives the same scene."""
+        s = self.solver
+        return {
+            "name": self.name,
+            "chain": {"links": self.chain.links, "length": list(self.chain.length),
+                      "mass": list(self.chain.mass), "gravity": self.chain.gravity},
+            "rod": {"E": self.rod.E, "nu": self.rod.nu, "yield_strength": self.rod.yield_strength,
+                    "tip_radius": self.tip_radius},
+            "surface": {"E": self.surface.E, "nu": self.surface.nu,
+                        "yield_strength": self.surface.yield_strength,
+                        "height": "initial" if self.surface_height is None else self.surface_height},
+            "contact": {"model": self.contact.model, "friction": self.contact.friction,
+                        "friction_mode": self.contact.friction_mode,
+                        "friction_eps": self.contact.friction_eps,
+                        # left out when not given: the joints then follow rod.tip_radius
+                        **({} if self.contact.joint_radius is None
+                           else {"joint_radius": list(self.contact.joint_radius)})},
+            "initial": {"q": list(self.q0), "u": list(self.u0)},
+            "solver": {"method": s.method, "jacobian": s.jacobian_setting, "rtol": s.rtol,
+                       "atol": s.atol, "t_end": "separation" if s.t_end is None else s.t_end,
+                       "t_max": s.t_max, "max_steps": s.max_steps,
+                       "sustained_contact": s.sustained_contact},
+        }
+
+    def to_toml(self) -> str:
+        """The scene as a TOML file that `load_scene` reads back to the same scene."""
+        lines = [f"name = {_toml_value(self.name)}"]
+        for section, values in self.to_dict().items():
+            if isinstance(values, dict):
+                lines += ["", f"[{section}]"] + [f"{k} = {_toml_value(v)}" for k, v in values.items()]
+        return "\n".join(lines) + "\n"
+
+
+def _whole_value(scene: Scene, section: str, key: str) -> Any:
+    """The value of key `section.key` of `scene` (not an element of it), as `Scene.__getitem__`
+    gives it."""
+    if section == "initial":
+        angles = {"q": list(scene.q0), "q_deg": [math.degrees(v) for v in scene.q0], "u": list(scene.u0)}
+        return angles[key]
+    if section == "contact" and key == "joint_radius":
+        return list(scene.joint_radii)
+    stated = scene.to_dict()
+    return (stated[section] if section else stated)[key]
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, float):
+        return repr(v)  # shortest repr that reads back to the same double
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    return str(v)

@@ -1,0 +1,52 @@
+"""The checks across keys that make a scene physical: yield below modulus, and every point of
+the chain starting on or above the surface."""
+from __future__ import annotations
+
+import math
+
+from ..codegen.thresholds import THRESHOLD
+from ..errors import SceneError
+from .model import Scene
+
+# A tip (or joint) this far below the surface, relative to the chain's length (at least
+# 1 m), still counts as touching it: the rounding of a height summed over the links (the
+# phase machine's own start test uses the same number).
+TOUCH_TOLERANCE = THRESHOLD["TOUCH_TOLERANCE"]
+
+
+def joint_heights(scene: Scene) -> list[float]:
+    """Heights of the pivot (0), of every joint and of the tip (last), in m, at the start."""
+    heights = [0.0]
+    for L, q in zip(scene.chain.length, scene.q0):
+        heights.append(heights[-1] + L * math.sin(q))
+    return heights
+
+
+def check_physics(scene: Scene) -> None:
+    """Checks across keys: yield below modulus; every point of the chain (the joints and the
+    tip, each a contact point) may start on the surface, none in it; nor may the pivot."""
+    for section, mat in (("rod", scene.rod), ("surface", scene.surface)):
+        if mat.yield_strength >= mat.E:
+            raise SceneError(f"{section}.yield_strength", f"must be below {section}.E (a yield "
+                             f"strain S_y/E = {mat.yield_strength / mat.E:.3g} >= 1 is not physical)")
+    heights = joint_heights(scene)
+    y_tip = heights[-1]
+    slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
+    if scene.surface_height is not None and scene.surface_height - y_tip > slack:
+        raise SceneError("surface.height", f"the tip starts {scene.surface_height - y_tip:.3g} m inside "
+                         f"the surface (tip at y = {y_tip:.6g} m, surface at {scene.surface_height:.6g} m); "
+                         "lower the surface or change initial.q")
+    y_s = y_tip if scene.surface_height is None else scene.surface_height
+    for link, (upper, lower) in enumerate(zip(heights[:-1], heights[1:]), start=1):
+        low = min(upper, lower)  # a straight bar is lowest at one of its ends
+        if y_s - low > slack:
+            if low == upper:
+                where = "its pivot end" if link == 1 else f"its pivot end (joint {link - 1})"
+            else:
+                where = "its lower end" + (" (the tip)" if link == scene.n else f" (joint {link})")
+            height = ' (surface.height = "initial" puts the surface at the tip)' \
+                if scene.surface_height is None else ""
+            raise SceneError("initial.q", f"link {link} starts below the surface: {where} is at "
+                             f"y = {low:.6g} m, the surface at y = {y_s:.6g} m{height}; every point "
+                             "of the chain must start on or above the surface (the joints and the tip "
+                             "may touch it)")

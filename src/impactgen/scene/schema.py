@@ -1,0 +1,162 @@
+"""The scene format: every key with its kind, default and physical check (SCHEMA), and the
+dotted names by which a key, or one element of a per-link list, is given.
+
+This is the single statement of the scene format (docs/scene.md mirrors it). Elements of a
+list-valued key are named from 1, as the links are numbered: `initial.u[2]` is omega20.
+"""
+from __future__ import annotations
+
+import difflib
+import re
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ..codegen.parameters import PARAMETERS
+from ..errors import SceneError
+
+NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+CONTACT_MODELS = ("three-phase", "hertz")
+# "frozen": the friction keeps the direction it had at contact start (docs/model.md: the
+# paper's published energy losses; not physical once the tip's tangential speed reverses)
+FRICTION_MODES = ("regularized", "coulomb", "frozen")
+# CVODE BDF, CVODE Adams, ARKODE's explicit Runge-Kutta pair, the same pair in plain C, and that
+# pair handing a segment that turns stiff (or long) to BDF (the glue's IG_METHOD_*, in order)
+METHODS = ("bdf", "adams", "erk", "dopri5", "auto")
+EXPLICIT_METHODS = ("erk", "dopri5")  # no Jacobian, no Newton iteration: for the non-stiff phases
+JACOBIANS = ("auto", "analytic", "difference")
+# "auto" emits the analytic Jacobian for BDF up to this many links. Above it, the Jacobian's
+# symbolic and compile cost (n = 10: +10 s, n = 20: +3 min) buys no measurable speed, since
+# CVODE evaluates it only ~10-15 times per impact; "analytic" still forces it.
+JACOBIAN_AUTO_MAX_LINKS = 6
+
+
+
+MISSING = object()  # the default of a key the scene must give
+
+
+# --------------------------------------------------------------------------- checks
+
+Check = Callable[[Any], str | None]  # returns the reason a value is bad, or None
+
+
+def positive(v: float) -> str | None:
+    return None if v > 0 else "must be > 0"
+
+
+def _physical(key: str) -> Check:
+    """The check of a key that sets a model parameter: the range the parameter table states,
+    which the generated C checks as well (an FMU importer's fmi2SetReal)."""
+    row = next(p for p in PARAMETERS if p.key.replace("[{i}]", "") == key)
+    text = row.range_text()
+    reason = f"must lie in {text}" if text[0] in "([" else f"must be {text}"
+
+    def check(v: float) -> str | None:
+        return None if row.admits(v) else reason
+    return check
+
+
+def _tolerance(v: float) -> str | None:
+    return None if 0 < v < 1 else "must lie in (0, 1)"
+
+
+@dataclass(frozen=True)
+class Key:
+    """One scene key: its expected kind, default and check."""
+
+    # "float", "int", "str", "name", "bool", "floats" (one number or a list of n), "list",
+    # "joint_floats" (one number or a list of n - 1: one per joint)
+    kind: str
+    default: Any = MISSING
+    check: Check | None = None
+    choices: tuple[str, ...] = ()
+    doc: str = ""
+
+
+SCHEMA: dict[str, dict[str, Key]] = {
+    "": {"name": Key("name", doc="letters, digits, '-' and '_'")},
+    "chain": {
+        "links": Key("int", check=lambda v: None if 1 <= v <= 60 else "must be between 1 and 60"),
+        "length": Key("floats", check=_physical("chain.length"), doc="m; one number or a list of n"),
+        "mass": Key("floats", check=_physical("chain.mass"), doc="kg; one number or a list of n"),
+        "gravity": Key("float", 9.81, _physical("chain.gravity"), doc="m/s^2"),
+    },
+    "rod": {
+        "E": Key("float", check=_physical("rod.E"), doc="Pa"),
+        "nu": Key("float", check=_physical("rod.nu")),
+        "yield_strength": Key("float", check=_physical("rod.yield_strength"), doc="Pa"),
+        "tip_radius": Key("float", check=_physical("rod.tip_radius"), doc="m"),
+    },
+    "surface": {
+        "E": Key("float", check=_physical("surface.E"), doc="Pa"),
+        "nu": Key("float", check=_physical("surface.nu")),
+        "yield_strength": Key("float", check=_physical("surface.yield_strength"), doc="Pa"),
+        "height": Key("height", "initial", doc='"initial" or a number in m'),
+    },
+    "contact": {
+        "model": Key("str", "three-phase", choices=CONTACT_MODELS),
+        "friction": Key("float", check=_physical("contact.friction"),
+                        doc="mu, the Coulomb coefficient; 0 for a frictionless surface"),
+        "friction_mode": Key("str", "regularized", choices=FRICTION_MODES),
+        "friction_eps": Key("float", 1e-6, _physical("contact.friction_eps"), doc="m/s"),
+        # a joint's contact radius has the tip radius's range
+        "joint_radius": Key("joint_floats", None, _physical("rod.tip_radius"),
+                            doc="m; one number or a list of n - 1 (one per joint); default rod.tip_radius"),
+    },
+    "initial": {
+        "q_deg": Key("list", None, doc="degrees"),
+        "q": Key("list", None, doc="radians"),
+        "u": Key("list", doc="rad/s"),
+    },
+    "solver": {
+        "method": Key("str", "auto", choices=METHODS),
+        "jacobian": Key("str", "auto", choices=JACOBIANS, doc="auto: analytic with bdf (or auto) up to 6 links"),
+        "rtol": Key("float", 1e-10, _tolerance),
+        "atol": Key("float", 1e-12, _tolerance),
+        "t_end": Key("t_end", "separation", doc='"separation" or a time in s'),
+        "t_max": Key("float", 10.0, positive, doc="s; longest wait for a first contact"),
+        "max_steps": Key("int", 500_000, lambda v: None if 0 < v <= 10**9 else "must lie in [1, 1e9]"),
+        "sustained_contact": Key("bool", True, doc="with t_end a time: rest the tip on the surface "
+                                                   "once impacts chatter"),
+    },
+}
+
+
+def all_keys() -> list[str]:
+    return [f"{s}.{k}" if s else k for s, keys in SCHEMA.items() for k in keys]
+
+
+def did_you_mean(key: str) -> str:
+    match = difflib.get_close_matches(key, all_keys(), n=1, cutoff=0.5)
+    return f" (did you mean '{match[0]}'?)" if match else ""
+
+
+LIST_KINDS = ("floats", "list", "joint_floats")  # the kinds of key whose elements an index names
+INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
+
+
+def split_key(dotted: str) -> tuple[str, str, int | None]:
+    """(section, key, 1-based element or None) of a dotted key such as `initial.u[2]`;
+    raise SceneError for a key the schema does not have."""
+    index = None
+    match = INDEXED_KEY.match(dotted)
+    name = match["key"] if match else dotted
+    section, _, key = name.rpartition(".")
+    if section not in SCHEMA or key not in SCHEMA[section]:
+        raise SceneError(dotted, f"unknown key{did_you_mean(name)}")
+    if match:
+        if SCHEMA[section][key].kind not in LIST_KINDS:
+            raise SceneError(dotted, f"{name} is not a list: give it without an index")
+        try:
+            index = int(match["index"])
+        except ValueError:
+            raise SceneError(dotted, f"the index must be a whole number from 1, got {match['index']!r}") from None
+        if index < 1:
+            raise SceneError(dotted, f"elements are numbered from 1 (as the links are), got {index}")
+    return section, key, index
+
+
+def resolve_jacobian(method: str, setting: str, links: int) -> str:
+    """The Jacobian a solver uses: `setting`, its "auto" resolved by the method and the links."""
+    if setting != "auto":
+        return setting
+    return "analytic" if method in ("bdf", "auto") and links <= JACOBIAN_AUTO_MAX_LINKS else "difference"
