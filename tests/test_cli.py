@@ -177,10 +177,10 @@ def test_examples_are_listed_copied_and_run_from_another_folder(tmp_path):
 def test_version_and_help_texts():
     import argparse
     import impactgen as package
-    from impactgen import cli
+    from impactgen.cli.parser import build_parser
     res = impactgen("--version")
     assert res.returncode == 0 and package.__version__ in res.stdout
-    parser = cli._parser()
+    parser = build_parser()
     commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     for sub in [parser, *commands.choices.values()]:
         for action in sub._actions:

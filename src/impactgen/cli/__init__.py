@@ -1,0 +1,62 @@
+"""The `impactgen` command.
+
+    impactgen --links N [--out DIR]            generate and compile an N-link steel chain (+ its scene)
+    impactgen generate SCENE [--out DIR]       generate and compile what SCENE needs
+    impactgen run SCENE|EXAMPLE [--engine c|reference] [--method M] [--json] [--set KEY=VALUE ...]
+                  [--out DIR [--format parquet|csv]]
+    impactgen examples [NAME [--out PATH]]     list the shipped example scenes, or copy one out
+    impactgen crosscheck [--links 1-6] [--random N] [--seed S] [--json]
+    impactgen plot SCENE [--out DIR] [--impact K | --window T0:T1] [--set KEY=VALUE ...]
+    impactgen animate SCENE [--out FILE.gif|.mp4] [--fps N] [--seconds S] [--set KEY=VALUE ...]
+    impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
+    impactgen stability [--quick] [--json] [--out DIR]
+    impactgen compare SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
+
+Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
+on stderr; --debug shows the traceback.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from typing import Sequence
+
+from ..errors import ImpactgenError, SceneError
+from .report import format_summary, one_line
+
+__all__ = ["main", "format_summary"]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the `impactgen` command on `argv` (sys.argv's by default) and return its exit code:
+    every impactgen error ends in one line on stderr (with --json, also a JSON object)."""
+    from .commands import COMMANDS, links
+    from .parser import build_parser
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    wants_json = "--json" in argv
+    try:
+        args = build_parser().parse_args(argv)
+        if args.command is not None:
+            return COMMANDS[args.command](args)
+        if args.links is not None:
+            return links(args)
+        raise SceneError(None, "nothing to do: give a command (run, examples, generate, plot, ...) or "
+                               "--links N; see 'impactgen --help'")
+    except ImpactgenError as exc:
+        if debug:
+            raise
+        message = one_line(str(exc))
+        print(f"impactgen: error: {message}", file=sys.stderr)
+        if wants_json:
+            print(json.dumps({"status": "error", "exit_code": exc.exit_code, "message": message}))
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("impactgen: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # the reader (head, say) stopped reading: not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except SystemExit as exc:  # --help, --version
+        return exc.code if isinstance(exc.code, int) else 0

@@ -1,0 +1,165 @@
+"""The `impactgen` command line: its arguments, one sub-parser per command."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import SceneError
+
+SET_HELP = "override a scene value (TOML), e.g. --set initial.u=[-0.1,-0.3] or --set initial.u[2]=-0.3"
+SCENE_HELP = "a scene file (TOML), or the name of a shipped example (see 'impactgen examples')"
+
+
+FORCE_HELP = "write into --out even if it holds files impactgen did not write there (they are replaced)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that raises SceneError (exit 2, one line) instead of printing usage."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise SceneError(None, f"{message} (see 'impactgen --help')")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every command (each with --help text, which a test checks)."""
+    from .. import __version__
+    p = _Parser(prog="impactgen", description="Generate fast C for an n-link pendulum impact "
+                "and simulate it (MODEL: Hertz, Jackson-Green, restitution, friction).",
+                epilog="Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure.")
+    p.add_argument("--version", action="version", version=f"impactgen {__version__}")
+    p.add_argument("--links", type=int, metavar="N", help="generate and compile an N-link "
+                   "steel chain (the paper's materials), write its scene, and print where the files are")
+    p.add_argument("--out", type=Path, help="folder for the generated C and scene (with --links; "
+                   "default generated/chainN)")
+    p.add_argument("--prefix", default="model", help="C name prefix of the generated files (default model)")
+    p.add_argument("--force", action="store_true", help=FORCE_HELP)
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
+
+    run = sub.add_parser("run", help="simulate a scene", description="Simulate a scene and print "
+                         "its first impact and, for a run to a time, the whole run.")
+    run.add_argument("scene", type=Path, help=SCENE_HELP)
+    run.add_argument("--engine", choices=("c", "reference"), default="c",
+                     help="c: generated C with CVODE (default); reference: the pure-Python engine")
+    run.add_argument("--method", default=None, help="integrator: auto, bdf, adams, erk or dopri5 (c engine); Radau, BDF, "
+                     "LSODA, DOP853 or RK45 (reference engine)")
+    run.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    run.add_argument("--out", type=Path, default=None, help="also write the trajectories, the impacts "
+                     "table and summary.json into this folder")
+    run.add_argument("--format", choices=("parquet", "csv"), default=None,
+                     help="table format with --out (default parquet if pyarrow is installed, else csv)")
+    run.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    ex = sub.add_parser("examples", help="list the shipped example scenes, or copy one out")
+    ex.add_argument("name", nargs="?", help="the example to copy out")
+    ex.add_argument("--out", type=Path, default=None, help="file or folder to copy it to (default ./NAME.toml)")
+    ex.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    sw = sub.add_parser("sweep", help="run a scene over a grid or random draws of its values",
+                        description="One row per case, in a table (Parquet with --out). KEY is a scene "
+                        "key, an element counted from 1 (initial.u[2]); SPEC a list [a,b], linspace(a,b,n), "
+                        "logspace(a,b,n), or with --random uniform(a,b), normal(mu,sigma), lognormal(mu,sigma).")
+    sw.add_argument("scene", type=Path, help=SCENE_HELP)
+    sw.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
+                    help="a varied key and its values; several make a full grid")
+    sw.add_argument("--random", type=int, default=0, metavar="N", help="draw N cases from the distributions")
+    sw.add_argument("--seed", type=int, default=0, help="seed of the random draws (default 0)")
+    sw.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    sw.add_argument("--workers", type=int, default=None, metavar="K",
+                    help="processes of the local pool, or of --scheduler local (default: all cores)")
+    sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="run on a Dask cluster: tcp://HOST:PORT of its scheduler, or 'local' "
+                         "for a LocalCluster started here")
+    kept = sw.add_mutually_exclusive_group()
+    kept.add_argument("--trajectories", type=int, default=0, metavar="K",
+                      help="keep the samples of K evenly chosen cases (needs --out), for T(t) figures")
+    kept.add_argument("--trajectory-cases", default=None, metavar="I,J,...",
+                      help="keep the samples of these cases (numbered from 0, as the table's 'case')")
+    sw.add_argument("--plot", action="store_true", help="draw the figures the varied keys call for "
+                    "into OUT/_figures (needs --out)")
+    sw.add_argument("--out", type=Path, default=None, help="folder for sweep.parquet; the same command "
+                    "resumes an interrupted sweep there")
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    sw.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    cc = sub.add_parser("crosscheck", help="compare the C engine with the reference engine")
+    cc.add_argument("--links", default="1-6", help="steel chains to run, e.g. 1-6 or 2,4")
+    cc.add_argument("--random", type=int, default=0, metavar="N", help="N random scenes")
+    cc.add_argument("--seed", type=int, default=0, help="seed of the random scenes")
+    cc.add_argument("--rtol", type=float, default=1e-11, help="solver rtol of both engines")
+    cc.add_argument("--tol", type=float, default=1e-7, help="largest relative difference allowed")
+    cc.add_argument("--method", default="Radau", help="solve_ivp method of the reference")
+    cc.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    cc.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    plot = sub.add_parser("plot", help="figures of one simulation (the paper's Figures 4-8, or the whole run)")
+    plot.add_argument("scene", type=Path, help=SCENE_HELP)
+    plot.add_argument("--out", type=Path, help="folder for the PNG files (default plots/<name>)")
+    plot.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    which = plot.add_mutually_exclusive_group()
+    which.add_argument("--impact", type=int, metavar="K", help="the figures of impact K (from 1)")
+    which.add_argument("--window", metavar="T0:T1", help="the figures between two times in s")
+    which.add_argument("--whole-run", action="store_true", help="the whole-run view even for one impact")
+    plot.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    plot.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    # -- compare (the rigid-body impact laws beside the compliant run): impactgen.compare
+    cmp = sub.add_parser("compare", help="the rigid-body impact laws beside the compliant run",
+                         description="Simulate a scene's first impact, then give its pre-impact state to "
+                                     "Newton's, Poisson's and Stronge's energetic law with the coefficients "
+                                     "of restitution the compliant run produced (docs/impact-laws.md).")
+    cmp.add_argument("scene", type=Path, help=SCENE_HELP)
+    cmp.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    cmp.add_argument("--json", action="store_true", help="print the rows as one JSON object")
+    cmp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    cmp.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    anim = sub.add_parser("animate", help="an animation of the chain over the run (GIF or MP4)",
+                          description="Draw the chain moving over the run, the surface, and each contact "
+                          "point (every joint, the tip) coloured by its phase. The frames are spread evenly "
+                          "over a warped time: the impacts share half of them equally, flight and sustained "
+                          "contact the other half in proportion to their duration (all of them if the run "
+                          "is all impact or all flight). Beside the chain: the simulated time, and the tip's "
+                          "height above the surface in micrometres (docs/animate.md).")
+    anim.add_argument("scene", type=Path, help=SCENE_HELP)
+    anim.add_argument("--out", type=Path, default=None, metavar="FILE",
+                      help="a .gif (Pillow) or .mp4 (needs ffmpeg) file (default ./<scene name>.gif)")
+    anim.add_argument("--fps", type=int, default=20, metavar="N", help="frames per second (default 20)")
+    anim.add_argument("--seconds", type=float, default=6.0, metavar="S",
+                      help="length of the animation (default 6); it has N * S frames")
+    anim.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    anim.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    anim.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    bench = sub.add_parser("bench", help="work-precision, RHS and scaling benchmarks with a report")
+    bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
+    bench.add_argument("--out", type=Path, default=Path("bench-results"), help="report folder")
+    bench.add_argument("--parts", default="workprecision,rhs,scaling,sweep,points",
+                       help="which benchmarks, comma-separated (workprecision, rhs, scaling, sweep, points)")
+    bench.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    stab = sub.add_parser("stability", help="run the catalogue of stiff and extreme cases")
+    stab.add_argument("--quick", action="store_true", help="fewer cases and settings")
+    stab.add_argument("--json", action="store_true", help="print the rows as one JSON object")
+    stab.add_argument("--out", type=Path, default=Path("stability-results"), help="report folder")
+    stab.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    fmu = sub.add_parser("fmu", help="export an FMI 2.0 FMU (Model Exchange, Co-Simulation or both)")
+    fmu.add_argument("scene", type=Path, nargs="?", help=SCENE_HELP)
+    fmu.add_argument("--links", type=int, help="an N-link steel chain instead of a scene (as impactgen --links N)")
+    fmu.add_argument("--out", type=Path, help="the .fmu file (default <scene name>.fmu)")
+    fmu.add_argument("--kind", default="both", choices=("me", "cs", "both"),
+                     help="me: Model Exchange (the importer's solver), cs: Co-Simulation (CVODE inside), "
+                          "both (default)")
+    fmu.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    fmu.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
+    gen.add_argument("scene", type=Path, help=SCENE_HELP)
+    gen.add_argument("--out", type=Path, help="folder for the C files (default generated/<name>)")
+    gen.add_argument("--prefix", default="model", help="C name prefix (default model)")
+    gen.add_argument("--force", action="store_true", help=FORCE_HELP)
+    gen.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    gen.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
