@@ -70,6 +70,7 @@ class Key:
     check: Check | None = None
     choices: tuple[str, ...] = ()
     doc: str = ""
+    symbols: tuple[str, ...] = ()  # how docs/model.md writes it, which a user may type for the key
 
 
 SCHEMA: dict[str, dict[str, Key]] = {
@@ -78,24 +79,24 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "links": Key("int", check=lambda v: None if 1 <= v <= 60 else "must be between 1 and 60"),
         "length": Key("floats", check=_physical("chain.length"), doc="m; one number or a list of n"),
         "mass": Key("floats", check=_physical("chain.mass"), doc="kg; one number or a list of n"),
-        "gravity": Key("float", 9.81, _physical("chain.gravity"), doc="m/s^2"),
+        "gravity": Key("float", 9.81, _physical("chain.gravity"), doc="m/s^2", symbols=("g",)),
     },
     "rod": {
         "E": Key("float", check=_physical("rod.E"), doc="Pa"),
         "nu": Key("float", check=_physical("rod.nu")),
-        "yield_strength": Key("float", check=_physical("rod.yield_strength"), doc="Pa"),
+        "yield_strength": Key("float", check=_physical("rod.yield_strength"), doc="Pa", symbols=("S_y",)),
         "tip_radius": Key("float", check=_physical("rod.tip_radius"), doc="m"),
     },
     "surface": {
         "E": Key("float", check=_physical("surface.E"), doc="Pa"),
         "nu": Key("float", check=_physical("surface.nu")),
-        "yield_strength": Key("float", check=_physical("surface.yield_strength"), doc="Pa"),
+        "yield_strength": Key("float", check=_physical("surface.yield_strength"), doc="Pa", symbols=("S_y",)),
         "height": Key("height", "initial", doc='"initial" or a number in m'),
     },
     "contact": {
         "model": Key("str", "three-phase", choices=CONTACT_MODELS),
         "friction": Key("float", check=_physical("contact.friction"),
-                        doc="mu, the Coulomb coefficient; 0 for a frictionless surface"),
+                        doc="mu, the Coulomb coefficient; 0 for a frictionless surface", symbols=("mu",)),
         "friction_mode": Key("str", "regularized", choices=FRICTION_MODES),
         "friction_eps": Key("float", 1e-6, _physical("contact.friction_eps"), doc="m/s"),
         # a joint's contact radius has the tip radius's range
@@ -105,7 +106,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "initial": {
         "q_deg": Key("list", None, doc="degrees"),
         "q": Key("list", None, doc="radians"),
-        "u": Key("list", doc="rad/s"),
+        "u": Key("list", doc="rad/s", symbols=("omega",)),
     },
     "solver": {
         "method": Key("str", "auto", choices=METHODS),
@@ -125,8 +126,26 @@ def all_keys() -> list[str]:
     return [f"{s}.{k}" if s else k for s, keys in SCHEMA.items() for k in keys]
 
 
-def did_you_mean(key: str) -> str:
-    match = difflib.get_close_matches(key, all_keys(), n=1, cutoff=0.5)
+def did_you_mean(name: str) -> str:
+    """The hint an unknown key's error ends with: the key that `name` most likely meant.
+
+    In this order: a key docs/model.md writes by the symbol given (``contact.mu`` is
+    ``contact.friction``), in the section named if it is one; for a section that exists, a
+    key of it by spelling (``contact.frction``), else a key of another section by spelling
+    (``rod.height`` is ``surface.height``); for a section that does not, the whole dotted key
+    by spelling (``solvr.rtol``). Spelling: difflib's ratio of at least 0.5.
+    """
+    section, _, key = name.rpartition(".")
+    named = {f"{s}.{k}" if s else k: (s, k, spec) for s, keys in SCHEMA.items() for k, spec in keys.items()}
+    match = [full for full, (s, k, spec) in named.items() if key in spec.symbols and section in (s, "")][:1]
+    if not match and section in SCHEMA:  # a section that exists: its own keys first, then the others'
+        for within in (True, False):
+            keys = {k: full for full, (s, k, _) in named.items() if (s == section) == within}
+            match = [keys[k] for k in difflib.get_close_matches(key, list(keys), n=1, cutoff=0.5)]
+            if match:
+                break
+    elif not match:
+        match = difflib.get_close_matches(name, list(named), n=1, cutoff=0.5)
     return f" (did you mean '{match[0]}'?)" if match else ""
 
 
