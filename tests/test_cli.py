@@ -248,3 +248,88 @@ def test_generate_writes_only_into_an_empty_or_generated_folder(tmp_path):
     assert "my own model" not in (out / "model.c").read_text()
     links = impactgen("--links", "1", "--out", str(other))
     assert links.returncode == 2 and "--force" in links.stderr
+
+
+# ----------------------------------------------------------------------------- the generated folder
+
+@pytest.mark.parametrize("prefix, words", [("a" * 300, "300 characters"), ("m" * 33, "at most 32"),
+                                           ("_model", "starting with a letter")])
+def test_a_bad_prefix_is_refused_before_anything_is_written(prefix, words, tmp_path):
+    """Run twice: each time one line, exit 2, and no folder made (issue 45)."""
+    out = tmp_path / "D"
+    for _ in range(2):
+        res = impactgen("--links", "2", "--prefix", prefix, "--out", str(out))
+        assert res.returncode == 2 and "--prefix" in res.stderr and words in res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
+        assert len(res.stderr) < 300  # a bounded excerpt of the prefix, not all of it
+        assert not out.exists()
+
+
+def test_an_out_folder_that_cannot_be_one_is_refused_up_front(tmp_path):
+    (tmp_path / "file").write_text("mine\n")
+    for out in (tmp_path / "file", tmp_path / "file" / "sub"):
+        res = impactgen("generate", "paper", "--out", str(out))
+        assert res.returncode == 2 and "--out" in res.stderr and "is a file" in res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1
+    assert (tmp_path / "file").read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("existing", [False, True])
+def test_a_write_that_fails_leaves_the_folder_as_it_was(existing, tmp_path, monkeypatch):
+    """A write that fails half-way (a full disk, say) ends in one BuildError and leaves neither
+    a new folder nor a half-made one: the files are renamed into place only once all are written."""
+    from pathlib import Path
+
+    from impactgen.cli import generated
+    from impactgen.errors import BuildError
+    out = tmp_path / "new" / "D"
+    if existing:
+        generated._write_generated(out, {"model.c": "/* first */\n", "model.h": "/* first */\n"})
+        before = {p.name: p.read_text() for p in out.iterdir()}
+    written = []
+    real = Path.write_text
+
+    def fails_on_the_second(path, text, *args, **kwargs):
+        written.append(path)
+        if len(written) == 2:
+            raise OSError(28, "No space left on device")
+        return real(path, text, *args, **kwargs)
+    monkeypatch.setattr(Path, "write_text", fails_on_the_second)
+    with pytest.raises(BuildError, match="No space left on device") as failed:
+        generated._write_generated(out, {"model.c": "/* second */\n", "model.h": "/* second */\n"})
+    assert failed.value.exit_code == 3
+    if existing:
+        assert {p.name: p.read_text() for p in out.iterdir()} == before
+    else:
+        assert not (tmp_path / "new").exists()
+
+
+# ----------------------------------------------------------------------------- the text report
+
+def test_the_report_names_the_point_of_one_impact_in_a_table():
+    import impactgen as package
+    from impactgen.cli import format_summary
+    text = format_summary(package.simulate(package.load_scene(PAPER)))
+    assert "first impact: the tip, t_start = 0 s" in text
+    assert "delta_max = 2.04" in text and "P_max     = 806" in text and "t_contact = 0.00046" in text
+    assert "delta_m " not in text and "P_m " not in text and "duration  " not in text
+    table = text[text.index("impacts:"):].splitlines()
+    assert table[1].split()[:2] == ["impact", "point"] and table[2].split()[:2] == ["1", "tip"]
+
+
+def test_the_report_describes_the_first_impact_wherever_it_happened():
+    """A run to separation whose first (and only) impact is a joint's: that impact, named, not
+    the tip's zeros (issue 45)."""
+    import impactgen as package
+    from impactgen.cli import format_summary
+    scene = package.load_scene(PAPER, {"chain.links": 3, "chain.length": [1, 1, 0.2],
+                                       "initial.q_deg": [-30, -80, 60], "initial.u": [0, 0, 0],
+                                       "surface.height": -1.5})
+    result = package.simulate(scene)
+    joint = result.impacts[0]
+    assert joint.point == "joint 2" and result.first_impact["delta_max"] == 0  # the tip's summary
+    text = format_summary(result)
+    assert f"first impact: joint 2, t_start = {joint.t_start:.9g} s" in text
+    assert f"delta_max = {joint.delta_max:.6g} m" in text and f"P_max     = {joint.P_max:.6g} N" in text
+    assert "phases of impact 1" in text and "elastic 0-" in text
+    assert "  joint 2 " in text[text.index("impacts:"):]

@@ -8,7 +8,7 @@ import pytest
 
 import impactgen
 from impactgen.errors import SceneError
-from impactgen.scene import parse_override
+from impactgen.scene import SCHEMA, parse_override
 from conftest import PAPER, built_both_ways
 
 try:
@@ -216,3 +216,67 @@ def test_the_scene_refuses_a_parameter_exactly_where_its_table_range_ends():
                     with pytest.raises(SceneError, match=re.escape(row.range_text())):
                         check_value(key, value, 2)
             assert row.admits(end) is not is_open
+
+
+# ----------------------------------------------------------------------------- reading by key
+
+def test_the_scene_reads_every_key_that_overrides_take():
+    """scene[key] gives what the scene file states, by the dotted keys of --set and overrides:
+    setting a key to what it reads leaves the scene as it was."""
+    for scene in (impactgen.load_scene("paper"), impactgen.load_scene("paper", {
+            "chain.links": 3, "chain.length": [1.0, 0.5, 0.25], "initial.q_deg": [-70, -60, -50],
+            "initial.u": [-0.1, -0.2, -0.3], "contact.joint_radius": [0.004, 0.003], "surface.height": -2.5,
+            "solver.t_end": 0.1})):
+        assert set(scene.keys()) == {f"{s}.{k}" if s else k for s, keys in SCHEMA.items() for k in keys}
+        for key in scene.keys():
+            value = scene[key]
+            assert scene.get(key) == value
+            changed = scene.replace({key: value})
+            assert changed[key] == pytest.approx(value) if key == "initial.q_deg" else changed[key] == value
+            if key not in ("initial.q_deg", "contact.joint_radius"):  # degrees round; radii given where none were
+                assert changed == scene, key
+
+
+def test_the_scene_reads_values_and_elements_as_the_file_names_them():
+    scene = impactgen.load_scene("paper", {"initial.u[2]": -0.3})
+    assert scene["surface.height"] == "initial" and scene["solver.t_end"] == "separation"
+    assert scene["initial.u"] == [-0.1, -0.3] and scene["initial.u[2]"] == -0.3
+    assert scene["initial.q_deg[1]"] == pytest.approx(-70.0) and scene["initial.q[1]"] == scene.q0[0]
+    assert scene["rod.tip_radius"] == scene.tip_radius == scene["contact.joint_radius[1]"]
+    assert scene["chain.length[2]"] == 1.0 and scene["contact.friction"] == 0.2
+    assert scene["solver.jacobian"] == "auto" and scene["name"] == "paper-double-pendulum"
+    lower = scene.replace({"surface.height": -2.0})
+    assert lower["surface.height"] == -2.0 == lower.surface_height
+
+
+@pytest.mark.parametrize("key", ["contact.mu", "surface.heigth", "initial.u[3]", "rod.E[1]", "initial.u[0]",
+                                 "solvr.rtol"])
+def test_reading_a_key_fails_as_setting_it_does(key):
+    """An unknown key, or an element that is not there, gives the error --set gives."""
+    scene = impactgen.load_scene("paper")
+    with pytest.raises(SceneError) as setting:
+        impactgen.load_scene("paper", dict([parse_override(f"{key}=1.0")]))
+    with pytest.raises(SceneError) as reading:
+        scene[key]
+    assert str(reading.value) == str(setting.value)
+    with pytest.raises(SceneError) as getting:
+        scene.get(key)
+    assert str(getting.value) == str(setting.value)
+
+
+def test_a_scene_is_read_by_key_not_iterated():
+    scene = impactgen.load_scene("paper")
+    with pytest.raises(SceneError, match="dotted string"):
+        scene[0]
+    with pytest.raises(TypeError):
+        iter(scene)
+
+
+@pytest.mark.parametrize("typed, meant", [
+    ("contact.mu", "contact.friction"), ("mu", "contact.friction"), ("chain.g", "chain.gravity"),
+    ("surface.S_y", "surface.yield_strength"), ("initial.omega", "initial.u"), ("contact.frction", "contact.friction"),
+    ("rod.height", "surface.height"), ("solvr.rtol", "solver.rtol"), ("nmae", "name"),
+])
+def test_an_unknown_key_suggests_the_key_meant(typed, meant):
+    with pytest.raises(SceneError, match=re.escape(f"did you mean '{meant}'?")):
+        impactgen.load_scene("paper", {typed: 1.0})
