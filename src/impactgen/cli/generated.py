@@ -36,19 +36,23 @@ def check_prefix(prefix: str) -> None:
 
 
 def check_folder(out: Path) -> None:
-    """Refuse an --out that cannot become a folder of ours: a file, a path through a file, or a
-    folder this process may not write into."""
-    existing = out
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
+    """Refuse an --out that cannot become a folder of ours: a file, a path through a file, a
+    folder this process may not write into, or one it cannot make (a new folder is made and
+    removed again to know)."""
+    missing = _missing_folders(out)
+    existing = missing[-1].parent if missing else out
     try:
         if not existing.is_dir():
             where = f"{out} is a file" if existing == out else f"{existing} is a file, so {out} cannot be a folder"
             raise SceneError("--out", f"{where}; choose a folder")
         if not os.access(existing, os.W_OK | os.X_OK):
             raise SceneError("--out", f"cannot write into {existing} (permission denied); choose another folder")
+        if missing:
+            out.mkdir(parents=True)
+            _remove_folders(missing)
     except OSError as exc:
-        raise SceneError("--out", f"cannot use {out}: {exc}") from None
+        _remove_folders(missing)
+        raise SceneError("--out", f"cannot make or use the folder {out}: {exc}") from None
 
 
 def _digest(path: Path) -> str:
@@ -92,6 +96,15 @@ def _missing_folders(out: Path) -> list[Path]:
     return missing
 
 
+def _remove_folders(folders: list[Path]) -> None:
+    """Remove these folders (deepest first) as far as they are empty."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            break
+
+
 def _write_generated(out: Path, files: dict[str, str]) -> None:
     """Write `files` into `out` and note them, with their digests, in its manifest: each is
     written beside its name first, and renamed into place once all are written. A write that
@@ -116,11 +129,7 @@ def _write_generated(out: Path, files: dict[str, str]) -> None:
                 path.unlink(missing_ok=True)
             except OSError:
                 pass
-        for folder in made:  # deepest first; a folder that is not empty stays
-            try:
-                folder.rmdir()
-            except OSError:
-                break
+        _remove_folders(made)
         raise BuildError(f"cannot write the generated files into {out}: {exc}") from None
 
 
