@@ -1,7 +1,7 @@
 """The `impactgen` command.
 
-    impactgen --links N [--out DIR]            generate and compile an N-link steel chain (+ its scene)
-    impactgen generate SCENE [--out DIR]       generate and compile what SCENE needs
+    impactgen --links N [--out DIR] [--prefix P]   generate and compile an N-link steel chain (+ its scene)
+    impactgen generate SCENE [--out DIR] [--prefix P]   generate and compile what SCENE needs
     impactgen run SCENE|EXAMPLE [--engine c|reference] [--method M] [--json] [--set KEY=VALUE ...]
                   [--out DIR [--format parquet|csv]]
     impactgen examples [NAME [--out PATH]]     list the shipped example scenes, or copy one out
@@ -11,6 +11,12 @@
     impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
     impactgen stability [--quick] [--json] [--out DIR]
     impactgen compare SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
+    impactgen sweep SCENE --vary KEY=SPEC [...] [--out DIR]
+    impactgen fmu SCENE|--links N [--kind me|cs|both] [--out FILE.fmu]
+
+The package holds one job per module: `parser` (the arguments), `commands` (one function per
+command), `report` (the text `impactgen run` prints) and `generated` (the folder `generate`
+writes).
 
 Exit codes: 0 success, 2 bad input, 3 build failure, 4 solver failure. Errors are one line
 on stderr; --debug shows the traceback.

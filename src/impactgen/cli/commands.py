@@ -12,7 +12,8 @@ from ..errors import SceneError, SolverError
 from .generated import generate
 from .report import format_summary, one_line
 
-def _fmu(args) -> int:
+
+def _fmu(args: argparse.Namespace) -> int:
     from ..fmu import build_fmu
     from ..scene import load_scene, steel_chain_scene
     if (args.scene is None) == (args.links is None):
@@ -38,6 +39,7 @@ def _fmu(args) -> int:
 
 
 def _overrides(items: list[str]) -> dict:
+    """The --set KEY=VALUE items as an overrides mapping."""
     from ..scene import parse_override
     return dict(parse_override(item) for item in items)
 

@@ -5,11 +5,14 @@ import argparse
 from pathlib import Path
 
 from ..errors import SceneError
+from .generated import MAX_PREFIX_LENGTH
 
 SET_HELP = "override a scene value (TOML), e.g. --set initial.u=[-0.1,-0.3] or --set initial.u[2]=-0.3"
 SCENE_HELP = "a scene file (TOML), or the name of a shipped example (see 'impactgen examples')"
 
 
+PREFIX_HELP = ("C name prefix of the generated files and functions (default model): a C identifier "
+               f"from a letter, at most {MAX_PREFIX_LENGTH} characters")
 FORCE_HELP = "write into --out even if it holds files impactgen did not write there (they are replaced)"
 
 
@@ -31,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "steel chain (the paper's materials), write its scene, and print where the files are")
     p.add_argument("--out", type=Path, help="folder for the generated C and scene (with --links; "
                    "default generated/chainN)")
-    p.add_argument("--prefix", default="model", help="C name prefix of the generated files (default model)")
+    p.add_argument("--prefix", default="model", help=PREFIX_HELP)
     p.add_argument("--force", action="store_true", help=FORCE_HELP)
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = p.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
@@ -158,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path, help=SCENE_HELP)
     gen.add_argument("--out", type=Path, help="folder for the C files (default generated/<name>)")
-    gen.add_argument("--prefix", default="model", help="C name prefix (default model)")
+    gen.add_argument("--prefix", default="model", help=PREFIX_HELP)
     gen.add_argument("--force", action="store_true", help=FORCE_HELP)
     gen.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     gen.add_argument("--debug", action="store_true", help="show tracebacks")
