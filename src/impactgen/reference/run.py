@@ -186,7 +186,7 @@ class _Run:
         y0 = np.concatenate([self.y, np.zeros(more)]) if more else self.y
         atol = np.concatenate([self.atol, np.full(more, self.atol_integrals)]) if more else self.atol
         extra = {"dense": True} if self.dense else {}
-        tip = self.model.tip
+        tip = self.model.tip  # the integrators pass point n's phase on to rhs (ReferenceModel.rhs)
         try:
             seg = self.integrate(self.model, tip.phase, self.t, y0, self.t_final, segment_events(self.model, self.y),
                                  self.method, self.rtol, atol, **extra)
