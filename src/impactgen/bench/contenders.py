@@ -174,8 +174,9 @@ class PyDyModel(ReferenceModel):
         model.p = np.array(list(scene.chain.length) + list(scene.chain.mass) + [scene.chain.gravity])
         return model
 
-    def chain_rates(self, t: float, y: np.ndarray, F: float, F_f: float) -> np.ndarray:
-        return self.f(y[:2 * self.n], t, np.array([F, F_f]), self.p)
+    def chain_rates(self, t: float, y: np.ndarray, F: np.ndarray, F_f: np.ndarray) -> np.ndarray:
+        # the loads of the last link: the forces at the tip, the only point of this Kane system
+        return self.f(y[:2 * self.n], t, np.array([F[-1], F_f[-1]]), self.p)
 
 
 _pydy_cache: dict = {}

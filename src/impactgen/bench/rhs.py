@@ -109,7 +109,7 @@ def rhs_benchmark(links: tuple[int, ...]) -> list[dict]:
 
         def lambdified() -> np.ndarray:
             q, u = y[:n], y[n:2 * n]
-            _, y_B, v_Bx, v_By = ref.chain.tip(q, u)
+            _, y_B, v_Bx, v_By = ref.chain.point(q, u, n)
             F = ref.contact.normal_force(PHASE, ref.contact.y_s - y_B)
             F_f = ref.contact.friction(F, v_Bx)
             a = list(q) + list(u) + consts + [F, F_f]

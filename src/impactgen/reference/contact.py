@@ -1,0 +1,100 @@
+"""The contact laws of one point, written again from the model documentation (docs/model.md
+sections 2 to 5): Hertz, Jackson-Green, restitution and reloading, friction, and the state a
+point fixes at its switches."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import SceneError
+from ..scene import Scene
+
+YIELD_ONSET = 1.9  # the elastic phase yields at delta = 1.9 delta_c (Jackson-Green's onset)
+
+
+@dataclass
+class Contact:
+    """Material constants (docs/model.md section 3) and the state fixed at the switches."""
+
+    E_star: float
+    R: float
+    delta_c: float
+    P_c: float
+    C_j: float
+    B: float
+    mu: float
+    eps: float
+    y_s: float
+    plastic: bool
+    exact_coulomb: bool = False
+    slip: float = 1.0  # exact Coulomb: +1 / -1 slipping along +x / -x, 0 stuck
+    frozen: bool = False  # friction keeps the direction it had at contact start
+    frozen_sign: float = 0.0  # frozen: the sign of v_x when the contact began
+    delta_m: float = 0.0
+    delta_r: float = 0.0
+    R_res: float = 0.0
+
+    @classmethod
+    def from_scene(cls, scene: Scene, y_s: float, radius: float | None = None) -> "Contact":
+        """The contact of a point of contact radius `radius` (rod.tip_radius, the radius of
+        every point that contact.joint_radius does not set, by default) on the surface y = y_s."""
+        Er, Es = scene.rod.E, scene.surface.E
+        E_star = 1.0 / ((1 - scene.rod.nu ** 2) / Er + (1 - scene.surface.nu ** 2) / Es)
+        weak = min((scene.rod, scene.surface), key=lambda mat: mat.yield_strength)
+        C_j = 1.295 * math.exp(0.736 * weak.nu)
+        R = scene.tip_radius if radius is None else radius
+        p0 = math.pi * C_j * weak.yield_strength / 2  # the pressure scale pi C_j S_y / 2
+        delta_c, P_c = R * (p0 / E_star) ** 2, 4.0 / 3.0 * (R / E_star) ** 2 * p0 ** 3
+        if not all(0 < v < math.inf for v in (E_star, delta_c, P_c)):  # the laws divide by them
+            key, value = ("rod.E", Er) if Er >= Es else ("surface.E", Es)
+            raise SceneError(key, f"{value!r} is outside its physical range (the contact constants E*, delta_c "
+                                  "and P_c it gives leave double precision's range)")
+        return cls(E_star=E_star, R=R, delta_c=delta_c, P_c=P_c, C_j=C_j,
+                   B=0.14 * math.exp(23 * weak.yield_strength / E_star),
+                   mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
+                   plastic=scene.contact.model == "three-phase", R_res=R,
+                   exact_coulomb=scene.contact.friction_mode == "coulomb" and scene.contact.friction > 0,
+                   frozen=scene.contact.friction_mode == "frozen")
+
+    def hertz(self, delta: float, radius: float) -> float:
+        return 4.0 / 3.0 * self.E_star * math.sqrt(radius) * delta ** 1.5 if delta > 0 else 0.0
+
+    def jackson_green(self, delta: float) -> float:
+        if delta <= 0:
+            return 0.0
+        w = delta / self.delta_c
+        a = math.sqrt(self.R * delta * (delta / (YIELD_ONSET * self.delta_c)) ** self.B)
+        H_Sy = 2.84 - 0.92 * (1 - math.cos(math.pi * a / self.R))
+        return self.P_c * (math.exp(-0.17 * w ** (5 / 12)) * w ** 1.5
+                           + 4 * H_Sy / self.C_j * (1 - math.exp(-(w ** (5 / 9)) / 78)) * w ** 1.1)
+
+    def normal_force(self, phase: str, delta: float) -> float:
+        if phase == "elastic":
+            return self.hertz(delta, self.R)
+        if phase == "elastoplastic":
+            return self.jackson_green(delta)
+        if phase in ("restitution", "reloading"):
+            return self.hertz(delta - self.delta_r, self.R_res) if self.plastic else self.hertz(delta, self.R)
+        return 0.0
+
+    def friction(self, F: float, v_x: float) -> float:
+        """Sliding friction: the regularized sign of v_x, or exact Coulomb's fixed slip sign."""
+        if self.mu == 0:
+            return 0.0
+        if self.exact_coulomb:
+            return -self.mu * F * self.slip
+        if self.frozen:
+            return -self.mu * F * self.frozen_sign
+        return -self.mu * F * v_x / math.sqrt(v_x ** 2 + self.eps ** 2)
+
+    def at_maximum_compression(self, delta_m: float, P_m: float) -> None:
+        """Fix delta_m, delta_r (Eq. 12, clamped) and R_res (continuity at delta_m)."""
+        self.delta_m = delta_m
+        if self.plastic:
+            self.delta_r = max(0.0, delta_m * (1 - math.sqrt(6.5 / (delta_m / self.delta_c + 5.5))))
+            self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
+        else:
+            self.delta_r, self.R_res = 0.0, self.R
+
+    def reset(self) -> None:
+        self.delta_m, self.delta_r, self.R_res = 0.0, 0.0, self.R

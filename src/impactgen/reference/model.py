@@ -1,0 +1,188 @@
+"""The reference model: the chain and its contact points, the forces at the points in contact,
+the right-hand side and the outputs."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Mapping
+
+import numpy as np
+
+from ..results import point_name
+from ..scene import TOUCH_TOLERANCE, Scene
+from .chain import ChainModel
+from .contact import Contact
+
+if TYPE_CHECKING:
+    from .result import PointImpact
+
+
+@dataclass
+class ContactPoint:
+    """A point of the chain that can touch the surface, with its own laws and state."""
+
+    index: int  # k = 1..n: the end of link k (joint k; n: the chain's end, the scene's tip)
+    name: str  # "joint k" or "tip" (results.point_name)
+    contact: Contact  # its material constants (its own radius) and the state fixed at its switches
+    phase: str = "free"
+    impact: "PointImpact | None" = None  # the impact it is in, if any
+
+
+@dataclass
+class PointForce:
+    """The forces at one point in contact, and its velocity (for the works)."""
+
+    point: ContactPoint
+    F: float
+    F_f: float
+    v_x: float
+    v_y: float
+    held: bool  # its F_f is the force that holds it still (exact Coulomb, stuck)
+
+
+def surface_height(scene: Scene) -> float:
+    """y_s: the scene's surface.height, or (surface.height = "initial") the height of the
+    chain's end at the start."""
+    if scene.surface_height is not None:
+        return scene.surface_height
+    return sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))
+
+
+def reachable_joints(scene: Scene, y_s: float) -> list[int]:
+    """The joints (k = 1..n-1) that can reach the surface: the chain up to joint k is at least
+    as long as the pivot is high above the surface (with the start's rounding). The chain's
+    end is always carried: the scene's surface is placed for it."""
+    slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
+    reach = np.cumsum(scene.chain.length)
+    return [k for k in range(1, scene.n) if reach[k - 1] >= -y_s - slack]
+
+
+@dataclass
+class ReferenceModel:
+    """The chain and its contact points: the joints that can reach the surface (`joints`) and
+    point n, the chain's end (the scene's tip), whose laws are `contact`. Every point has its
+    own laws, phase (`ContactPoint.phase`) and state, and acts through its own Jacobian."""
+
+    chain: ChainModel
+    contact: Contact  # the laws of point n
+    n: int
+    friction_state: bool  # the state carries W_friction
+    joints: list[ContactPoint] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.points = [*self.joints, ContactPoint(self.n, point_name(self.n, self.n), self.contact)]  # by index
+        self.nstate = 2 * self.n + (4 if self.friction_state else 2)  # q, u, the works, the impulses
+
+    @property
+    def tip(self) -> ContactPoint:
+        """Point n, the chain's end: the point the scene's tip names (its outputs x_B, ..., F)."""
+        return self.points[-1]
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """The columns of the state as `rhs` lays them out (the C model's, build.CompiledModel's)."""
+        n = self.n
+        integrated = (("W_normal", "W_friction", "P_normal", "P_friction") if self.friction_state
+                      else ("W_normal", "P_normal"))  # the works, then the impulses
+        return (*(f"q{i + 1}" for i in range(n)), *(f"u{i + 1}" for i in range(n)), *integrated)
+
+    @classmethod
+    def from_scene(cls, scene: Scene) -> "ReferenceModel":
+        y_s = surface_height(scene)
+        joints = [ContactPoint(k, point_name(k, scene.n), Contact.from_scene(scene, y_s, scene.joint_radii[k - 1]))
+                  for k in reachable_joints(scene, y_s)]
+        return cls(ChainModel.from_scene(scene), Contact.from_scene(scene, y_s), scene.n,
+                   scene.contact.friction > 0, joints)
+
+    def touching(self) -> list[ContactPoint]:
+        """The points in contact (in a phase other than free), by index."""
+        return [p for p in self.points if p.phase != "free"]
+
+    def kinematics(self, y: np.ndarray, point: ContactPoint) -> tuple[float, float, float, float]:
+        """x, y, v_x, v_y of a contact point."""
+        return self.chain.point(y[:self.n], y[self.n:2 * self.n], point.index)
+
+    def delta_and_rate(self, y: np.ndarray, point: ContactPoint) -> tuple[float, float]:
+        """The penetration of a point and its rate."""
+        _, y_k, _, v_y = self.kinematics(y, point)
+        return point.contact.y_s - y_k, -v_y
+
+    def rhs(self, t: float, y: np.ndarray, phase: str | None = None) -> np.ndarray:
+        """dy/dt, each point's forces acting through its own Jacobian (`ChainModel.loads`), every
+        point in its own phase, or point n in `phase` when given (the callers that drive point n
+        alone: crosscheck.rhs_pair, the benchmarks' integrators). A state longer than `nstate`
+        carries, after it, the works and impulses of each point in contact on its own (when
+        several are)."""
+        active = self.contact_forces(y, {} if phase is None else {self.n: phase})
+        indices = [a.point.index for a in active]
+        F = self.chain.loads(indices, [a.F for a in active])
+        F_f = self.chain.loads(indices, [a.F_f for a in active])
+        total = sum((self.integrands(a) for a in active), np.zeros(self.nstate - 2 * self.n))
+        parts = [self.chain_rates(t, y, F, F_f), total]
+        if len(y) > self.nstate:  # each point's own, in the order of `points`
+            parts += [self.integrands(a) for a in active]
+        return np.concatenate(parts)
+
+    def chain_rates(self, t: float, y: np.ndarray, F: np.ndarray, F_f: np.ndarray) -> np.ndarray:
+        """dq/dt and du/dt of the chain under the normal and friction loads each link carries
+        (`ChainModel.loads`)."""
+        n = self.n
+        q, u = y[:n], y[n:2 * n]
+        return np.concatenate([u, self.chain.accelerations(q, u, F, F_f)])
+
+    def integrands(self, a: PointForce) -> np.ndarray:
+        """The rates of W_normal[, W_friction], P_normal[, P_friction] of one point's forces."""
+        if self.friction_state:
+            return np.array([a.F * a.v_y, a.F_f * a.v_x, a.F, a.F_f])
+        return np.array([a.F * a.v_y, a.F])
+
+    def contact_forces(self, y: np.ndarray, phases: Mapping[int, str] | None = None,
+                       still: ContactPoint | None = None) -> list[PointForce]:
+        """The forces at every point in contact. `phases`: phases by point index that replace
+        the points' own. `still`: a point held still as if stuck, to see whether it sticks at a
+        stop. Stuck points are held together (exact Coulomb): their forces depend on each other."""
+        phases = phases or {}
+        active = []
+        for p in self.points:
+            phase = phases.get(p.index, p.phase)
+            if phase == "free":
+                continue
+            _, y_k, v_x, v_y = self.kinematics(y, p)
+            F = p.contact.normal_force(phase, p.contact.y_s - y_k)
+            held = p is still or (p.contact.exact_coulomb and p.contact.slip == 0)
+            active.append(PointForce(p, F, 0.0 if held else p.contact.friction(F, v_x), v_x, v_y, held))
+        held = [a for a in active if a.held]
+        if held:
+            n = self.n
+            indices = [a.point.index for a in active]
+            hold = self.chain.holding_forces(y[:n], y[n:2 * n], self.chain.loads(indices, [a.F for a in active]),
+                                             self.chain.loads(indices, [a.F_f for a in active]),
+                                             [a.point.index for a in held])
+            for a, h in zip(held, hold):
+                a.F_f = float(h)
+        return active
+
+    def friction_force(self, y: np.ndarray, point: ContactPoint) -> float:
+        """The friction force at a point: 0 when it is free."""
+        return next((a.F_f for a in self.contact_forces(y) if a.point is point), 0.0)
+
+    def outputs(self, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+        """The outputs at samples y (N, nstate), as the C engine names them: point n's position,
+        speed, penetration and forces (x_B, ..., F, F_f: the tip's), the energies, and each
+        joint's penetration and normal force (delta_Jk, F_Jk)."""
+        n, tip = self.n, self.tip
+        q, u = y[:, :n].T, y[:, n:2 * n].T
+        x_B, y_B, v_Bx, v_By = self.chain.point(q, u, n)
+        delta = tip.contact.y_s - y_B
+        F = np.array([tip.contact.normal_force(tip.phase, d) for d in delta])
+        out = {"x_B": x_B, "y_B": y_B, "v_Bx": v_Bx, "v_By": v_By, "delta": delta, "delta_rate": -v_By, "F": F}
+        if self.friction_state:
+            out["F_f"] = np.array([self.friction_force(row, tip) for row in y])
+        T, V = self.chain.energies(q, u)
+        out.update({f"T{i + 1}": T[i] for i in range(n)})
+        out["T"], out["V"] = T.sum(0), V
+        for p in self.joints:
+            delta_k = p.contact.y_s - self.chain.point(q, u, p.index)[1]
+            out[f"delta_J{p.index}"] = delta_k
+            out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d) for d in delta_k])
+        return out
