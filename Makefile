@@ -16,8 +16,10 @@ demo: $(STAMP)
 	$(VENV)/bin/impactgen run scenes/paper.toml
 	$(VENV)/bin/python scripts/paper_table.py
 
+# the tests on every core (pytest-xdist); make test WORKERS=0 runs them in one process
+WORKERS ?= auto
 test: $(STAMP)
-	$(VENV)/bin/python -m pytest -q
+	$(VENV)/bin/python -m pytest -q -n $(WORKERS)
 
 # SUNDIALS 7 from Debian unstable, unpacked in a temporary folder (docs/safety.md)
 check-sundials7: $(STAMP)
