@@ -145,8 +145,8 @@ def runtime_key(sundials: Sundials) -> str:
     parts = {
         "runtime": {f: hashlib.sha256(_native(f).encode()).hexdigest() for f in RUNTIME_FILES},
         "flags": build_flags(),
-        "compiler": [*_compiler(), *(str(sysconfig.get_config_var(v)) for v in
-                                     ("CC", "CFLAGS", "CCSHARED", "AR", "ARFLAGS", "MULTIARCH"))],
+        "compiler": [*_compiler(), *(os.environ.get(v, "") for v in ("CPPFLAGS", "AR", "ARFLAGS")),
+                     *(str(sysconfig.get_config_var(v)) for v in ("CC", "CFLAGS", "CCSHARED", "AR", "ARFLAGS"))],
         "sundials": _sundials_parts(sundials),
     }
     return "runtime-" + hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:32]
@@ -203,9 +203,9 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
     runtime archive `runtime`."""
     for name, text in gen.files().items():
         (workdir / name).write_text(text)
-    for name in GLUE_FILES:  # every header (solver.h includes stepper.h); the runtime's C is in its archive
-        if name in MODEL_GLUE_FILES or name.endswith(".h"):
-            (workdir / name).write_text(_native(name))
+    runtime_headers = [name for name in RUNTIME_FILES if name.endswith(".h")]  # solver.h includes stepper.h
+    for name in (*MODEL_GLUE_FILES, *runtime_headers):
+        (workdir / name).write_text(_native(name))
     ffi = cffi.FFI()
     ffi.cdef(gen.cdef + _glue_cdef())
     ffi.set_source(
