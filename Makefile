@@ -16,8 +16,11 @@ demo: $(STAMP)
 	$(VENV)/bin/impactgen run scenes/paper.toml
 	$(VENV)/bin/python scripts/paper_table.py
 
+# the tests on every core (pytest-xdist), a test file's tests in one worker so that the file's
+# fixtures (FMUs, cross-checks) are built once; make test WORKERS=0 runs them in one process
+WORKERS ?= auto
 test: $(STAMP)
-	$(VENV)/bin/python -m pytest -q
+	$(VENV)/bin/python -m pytest -q -n $(WORKERS) --dist loadscope
 
 # SUNDIALS 7 from Debian unstable, unpacked in a temporary folder (docs/safety.md)
 check-sundials7: $(STAMP)

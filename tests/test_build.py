@@ -43,7 +43,8 @@ def built_cache(tmp_path_factory) -> Path:
 
 
 def _entry(cache: Path) -> Path:
-    (entry,) = [p for p in cache.iterdir() if p.is_dir()]
+    """The one model entry (beside it, the runtime archive's entry that every model links)."""
+    (entry,) = [p for p in cache.iterdir() if p.is_dir() and not p.name.startswith("runtime-")]
     return entry
 
 

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 import impactgen
-from conftest import PAPER, ROOT, early_run, start_early
+from conftest import PAPER, ROOT
 
 SANITIZED = bool(os.environ.get("IMPACTGEN_SANITIZE"))
 CC = shutil.which("cc") or shutil.which("gcc")
@@ -52,13 +52,11 @@ def _sanitize_command() -> dict:
             "timeout": 900, "env": {**os.environ, "PYTHON": sys.executable}}
 
 
-# about a minute of compiling and running under the sanitizers, in a cache and a folder of its
-# own: started at the end of the collection, beside the tests before this one
+# about a minute of compiling and running under the sanitizers, in a cache and a folder of its own
 @pytest.mark.skipif(SANITIZED or not _asan_available(),
                     reason="already under the sanitizers, or no AddressSanitizer runtime")
-@start_early(_sanitize_command)
-def test_glue_and_simulations_are_clean_under_sanitizers(request):
-    res = early_run(request.node, _sanitize_command)
+def test_glue_and_simulations_are_clean_under_sanitizers():
+    res = subprocess.run(capture_output=True, text=True, **_sanitize_command())
     output = res.stdout + res.stderr
     assert res.returncode == 0, output[-4000:]
     assert "ok (0 failures)" in output

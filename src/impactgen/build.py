@@ -5,6 +5,10 @@ generator's own source and templates, the glue, the compiler flags, the SUNDIALS
 and the Python ABI. Entries are built in a temporary folder and renamed into place (atomic),
 under a per-entry lock so that concurrent processes build once; an entry whose manifest
 does not match its files is moved aside and rebuilt, never trusted.
+
+The part of the runtime that knows no model (the steppers, the explicit pair, the small
+kernels) is compiled once per cache into a static archive, an entry of its own keyed by its
+sources, the flags, the compiler and SUNDIALS; each model's extension links it.
 """
 from __future__ import annotations
 
@@ -27,7 +31,7 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import cffi
 
@@ -41,11 +45,15 @@ from .sundials import Sundials, find_sundials
 COMPILE_ARGS = ("-O3", "-fno-math-errno")
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
-# the runtime written once for every model: the solver over its steppers, the run loop, the tallies
-GLUE_FILES = ("solver.h", "solver_state.h", "solver.c", "run.c", "tally.h", "tally.c", "stepper.h",
-              "stepper.c", "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c", "step_pair.c",
-              "step_auto.c",
-              "dopri5.h", "dopri5.c", "small_kernels.h", "small_kernels.c")
+# The runtime written once for every model. The solver, the run loop and the tallies include the
+# generated model's headers and are compiled with each model; the steppers under them, the explicit
+# pair and the small kernels include no model header and name no MODEL_* macro, so they are compiled
+# once per cache into a static archive (RUNTIME_ARCHIVE) that every model links.
+MODEL_GLUE_FILES = ("solver.h", "solver_state.h", "solver.c", "run.c", "tally.h", "tally.c")
+RUNTIME_FILES = ("stepper.h", "stepper.c", "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c",
+                 "step_pair.c", "step_auto.c", "dopri5.h", "dopri5.c", "small_kernels.h", "small_kernels.c")
+GLUE_FILES = MODEL_GLUE_FILES + RUNTIME_FILES
+RUNTIME_ARCHIVE = "impactgen_runtime"  # built as libimpactgen_runtime.a
 CDEF_HEADERS = ("stepper.h", "tally.h", "solver.h")  # the runtime's declarations cffi reads, in this order
 MANIFEST = "manifest.json"
 
@@ -106,19 +114,42 @@ def build_flags() -> tuple[tuple[str, ...], tuple[str, ...]]:
     return COMPILE_ARGS, ()
 
 
+def _compiler() -> list[str]:
+    """What chooses the compiler and its base flags besides ours (distutils reads these)."""
+    return [os.environ.get(v, "") for v in ("CC", "CFLAGS", "LDFLAGS", "LDSHARED")]
+
+
+def _sundials_parts(sundials: Sundials) -> list:
+    return [sundials.version, sundials.include_dirs, sundials.library_dirs, sundials.libraries]
+
+
 def build_key(spec: ModelSpec, sundials: Sundials) -> str:
     parts = {
         "spec": spec.to_json(),
         "generator": _generator_fingerprint(),
         "glue": [hashlib.sha256(_native(f).encode()).hexdigest() for f in GLUE_FILES],
         "flags": build_flags(),
-        "compiler": [os.environ.get(v, "") for v in ("CC", "CFLAGS", "LDFLAGS", "LDSHARED")],
-        "sundials": [sundials.version, sundials.include_dirs, sundials.library_dirs, sundials.libraries],
+        "compiler": _compiler(),
+        "sundials": _sundials_parts(sundials),
         "python": [sys.implementation.cache_tag, sysconfig.get_config_var("EXT_SUFFIX"),
                    sysconfig.get_platform()],
         "cffi": cffi.__version__,
     }
     return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:32]
+
+
+def runtime_key(sundials: Sundials) -> str:
+    """The cache entry of the model-independent runtime: its sources, the flags, the compiler
+    (the environment's and Python's build configuration, which distutils compiles with) and
+    SUNDIALS; not the model, not the generator."""
+    parts = {
+        "runtime": {f: hashlib.sha256(_native(f).encode()).hexdigest() for f in RUNTIME_FILES},
+        "flags": build_flags(),
+        "compiler": [*_compiler(), *(os.environ.get(v, "") for v in ("CPPFLAGS", "AR", "ARFLAGS")),
+                     *(str(sysconfig.get_config_var(v)) for v in ("CC", "CFLAGS", "CCSHARED", "AR", "ARFLAGS"))],
+        "sundials": _sundials_parts(sundials),
+    }
+    return "runtime-" + hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:32]
 
 
 def _glue_cdef() -> str:
@@ -162,18 +193,27 @@ def _first_error(log: str) -> str:
     return lines[-1].strip() if lines else "no compiler output"
 
 
-def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir: Path) -> Path:
+def _failed(what: str, log: str, exc: Exception, workdir: Path) -> BuildError:
+    return BuildError(f"compiling {what} failed: {_first_error(log)} ({type(exc).__name__}); "
+                      f"build folder kept in {workdir}")
+
+
+def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir: Path, runtime: Path) -> Path:
+    """The model's extension: its generated C and the model-dependent glue, linked with the
+    runtime archive `runtime`."""
     for name, text in gen.files().items():
         (workdir / name).write_text(text)
-    for name in GLUE_FILES:
+    runtime_headers = [name for name in RUNTIME_FILES if name.endswith(".h")]  # solver.h includes stepper.h
+    for name in (*MODEL_GLUE_FILES, *runtime_headers):
         (workdir / name).write_text(_native(name))
     ffi = cffi.FFI()
     ffi.cdef(gen.cdef + _glue_cdef())
     ffi.set_source(
         module_name,
         '#include "model.h"\n#include "model_machine.h"\n#include "solver.h"\n',
-        sources=[str(workdir / name) for name in (*gen.files(), *GLUE_FILES) if name.endswith(".c")],
+        sources=[str(workdir / name) for name in (*gen.files(), *MODEL_GLUE_FILES) if name.endswith(".c")],
         include_dirs=[str(workdir), *sundials.include_dirs],
+        extra_objects=[str(runtime)],  # before the SUNDIALS libraries on the link line, as an archive must be
         library_dirs=list(sundials.library_dirs),
         runtime_library_dirs=list(sundials.library_dirs),
         libraries=list(sundials.libraries) + ["m"],
@@ -184,9 +224,35 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
         try:
             so = ffi.compile(tmpdir=str(workdir), verbose=False)
         except Exception as exc:  # cffi raises distutils/setuptools errors of several kinds
-            raise BuildError(f"compiling the {gen.spec.slug} model failed: {_first_error(log())} "
-                             f"({type(exc).__name__}); build folder kept in {workdir}") from None
+            raise _failed(f"the {gen.spec.slug} model", log(), exc, workdir) from None
     return Path(so)
+
+
+def _compile_runtime(sundials: Sundials, workdir: Path, for_what: str) -> dict:
+    """The model-independent runtime as a static archive of position-independent objects,
+    compiled by the compiler and with the flags cffi uses for the models; its manifest."""
+    import setuptools  # noqa: F401  (first: its distutils is the one cffi compiles with)
+    from distutils.ccompiler import new_compiler
+    from distutils.sysconfig import customize_compiler
+
+    for name in RUNTIME_FILES:
+        text = _native(name)
+        # a runtime file that came to depend on the model would be compiled here without it
+        assert not re.search(r'\bMODEL_[A-Z]|#\s*include\s*"model', text), \
+            f"{name} depends on the generated model: move it to MODEL_GLUE_FILES"
+        (workdir / name).write_text(text)
+    compiler = new_compiler()
+    customize_compiler(compiler)  # CC, CFLAGS and -fPIC (CCSHARED) as build_ext sets them
+    with _captured_fds() as log:
+        try:
+            objects = compiler.compile([str(workdir / n) for n in RUNTIME_FILES if n.endswith(".c")],
+                                       output_dir=str(workdir), include_dirs=[str(workdir), *sundials.include_dirs],
+                                       extra_postargs=list(build_flags()[0]))
+            compiler.create_static_lib(objects, RUNTIME_ARCHIVE, output_dir=str(workdir))
+        except Exception as exc:  # distutils' CompileError, LibError
+            raise _failed(f"the C runtime for {for_what}", log(), exc, workdir) from None
+    return {"library": compiler.library_filename(RUNTIME_ARCHIVE), "sundials": sundials.version,
+            "sources": list(RUNTIME_FILES)}
 
 
 def _valid(entry: Path) -> dict | None:
@@ -211,9 +277,11 @@ def _lock(path: Path):
             fcntl.flock(fh.fileno(), fcntl.LOCK_UN)
 
 
-def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> Path:
+def _built_entry(root: Path, key: str, build: Callable[[Path], dict]) -> Path:
+    """The valid cache entry `key`, built once across processes: under its lock, `build`
+    fills a fresh temporary folder and returns the manifest (naming the "library" file), and
+    the folder is renamed into place. A broken or partial entry is moved aside first."""
     entry = root / key
-    module_name = f"_impactgen_{key}"
     with _lock(root / f"{key}.lock"):
         if _valid(entry):
             return entry
@@ -221,26 +289,14 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
             shutil.rmtree(entry.with_name(entry.name + ".broken"), ignore_errors=True)
             with contextlib.suppress(OSError):
                 entry.rename(entry.with_name(entry.name + ".broken"))
-        from .codegen.emit import generate_model
-        gen = generate_model(spec)
         work = Path(tempfile.mkdtemp(prefix=f"{key}.tmp-", dir=root))
-        so = _compile(gen, sundials, module_name, work)
-        library = so.name
-        if so.parent != work:  # keep the library inside the entry it belongs to
-            shutil.copy2(so, work / library)
-        meta = {
-            "spec": json.loads(spec.to_json()),
-            "module": module_name,
-            "library": library,
-            "sha256": _file_digest(work / library),
-            "sundials": sundials.version,
-            "state_names": gen.state_names,
-            "output_names": gen.output_names,
-            "event_names": gen.event_names,
-            "param_names": gen.param_names,
-            "phases": gen.phases,
-            "structure_hash": gen.structure_hash,
-        }
+        try:
+            meta = build(work)
+        except BaseException:
+            if not any(work.iterdir()):  # failed before writing a file: nothing to look at
+                work.rmdir()
+            raise
+        meta["sha256"] = _file_digest(work / meta["library"])
         for junk in work.iterdir():  # keep the sources, the library and the manifest only
             if junk.is_dir():
                 shutil.rmtree(junk)
@@ -249,6 +305,46 @@ def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> P
         (work / MANIFEST).write_text(json.dumps(meta, indent=1))
         os.rename(work, entry)
         return entry
+
+
+def _runtime_archive(sundials: Sundials, root: Path, for_what: str) -> Path:
+    """The runtime archive of this cache for the current flags, built on first use."""
+    key = runtime_key(sundials)
+    entry = root / key
+    if _valid(entry) is None:
+        entry = _built_entry(root, key, lambda work: _compile_runtime(sundials, work, for_what))
+    manifest = _valid(entry)
+    if manifest is None:
+        raise BuildError(f"the build in {entry} did not produce a valid runtime archive")
+    return entry / manifest["library"]
+
+
+def _build_entry(spec: ModelSpec, sundials: Sundials, key: str, root: Path) -> Path:
+    module_name = f"_impactgen_{key}"
+
+    def build(work: Path) -> dict:
+        from .codegen.emit import generate_model
+        gen = generate_model(spec)
+        runtime = _runtime_archive(sundials, root, f"the {spec.slug} model")
+        so = _compile(gen, sundials, module_name, work, runtime)
+        library = so.name
+        if so.parent != work:  # keep the library inside the entry it belongs to
+            shutil.copy2(so, work / library)
+        return {
+            "spec": json.loads(spec.to_json()),
+            "module": module_name,
+            "library": library,
+            "sundials": sundials.version,
+            "runtime": runtime.parent.name,
+            "state_names": gen.state_names,
+            "output_names": gen.output_names,
+            "event_names": gen.event_names,
+            "param_names": gen.param_names,
+            "phases": gen.phases,
+            "structure_hash": gen.structure_hash,
+        }
+
+    return _built_entry(root, key, build)
 
 
 _loaded: dict[ModelSpec, CompiledModel] = {}  # the models this process has loaded
