@@ -172,3 +172,55 @@ def test_a_rigid_surface_of_any_modulus_gives_the_same_impact_in_both_engines():
         with pytest.raises(SceneError, match="double precision") as err:
             impactgen.simulate(both, engine=engine)
         assert err.value.key == "rod.E"
+
+
+# -- issue 45: messages quote a bounded excerpt of what they refuse ---------------------------
+
+HUGE = 2_000_000  # characters of a hostile value
+
+
+@pytest.mark.parametrize("call", [
+    "scene name", "override key", "override value", "simulate engine", "simulate method", "t_eval word",
+    "sweep vary key", "sweep vary spec", "example name", "dense output time",
+])
+def test_a_message_quotes_an_excerpt_of_a_huge_value(call, paper_scene, tmp_path):
+    from impactgen.errors import EXCERPT_CHARS, MESSAGE_CHARS
+    big = "n" * HUGE
+    calls = {
+        "scene name": lambda: paper_scene.replace({"name": big}),
+        "override key": lambda: impactgen.load_scene("paper", overrides={big: 1.0}),
+        "override value": lambda: impactgen.load_scene("paper", overrides={"solver.method": big}),
+        "simulate engine": lambda: impactgen.simulate(paper_scene, engine=big),
+        "simulate method": lambda: impactgen.simulate(paper_scene, method=big),
+        "t_eval word": lambda: impactgen.simulate(paper_scene, t_eval=[big]),
+        "sweep vary key": lambda: impactgen.sweep(paper_scene, vary={big: [1.0]}),
+        "sweep vary spec": lambda: impactgen.sweep(paper_scene, vary={"initial.u[2]": big}),
+        "example name": lambda: impactgen.load_scene(big[:200]),
+        "dense output time": lambda: impactgen.simulate(paper_scene, dense_output=True).sol(big),
+    }
+    with pytest.raises(ImpactgenError) as caught:
+        calls[call]()
+    message = str(caught.value)
+    assert "\n" not in message and len(message) <= MESSAGE_CHARS + 200, len(message)
+    assert "n" * (EXCERPT_CHARS + 1) not in message
+
+
+def test_the_excerpt_names_the_size_of_what_it_cuts():
+    from impactgen.errors import excerpt
+    assert excerpt("abc") == "'abc'"
+    assert excerpt("x" * 10_000).endswith("... (10000 characters)")
+    assert excerpt(list(range(10**6))).endswith("(1000000 items)")
+    assert excerpt(np.float64(-1.5)) == "-1.5"
+    assert len(excerpt(np.zeros(10**7))) < 200
+
+
+def test_the_command_line_does_not_repeat_a_2_mb_scene_name(tmp_path):
+    import re
+    from pathlib import Path
+    text = (Path(impactgen.__file__).parents[2] / "scenes" / "paper.toml").read_text()
+    scene = tmp_path / "big.toml"
+    scene.write_text(re.sub(r"^name = .*$", f'name = "{"n" * HUGE}"', text, count=1, flags=re.M))
+    res = _cli("run", str(scene))
+    assert res.returncode == 2
+    assert len(res.stderr) < 1000 and len(res.stderr.strip().splitlines()) == 1
+    assert f"({HUGE + 2} characters)" in res.stderr  # the quote's size is named

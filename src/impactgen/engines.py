@@ -14,7 +14,7 @@ from . import phases
 from .build import compile_model
 from .codegen.spec import ModelSpec
 from .dense import dropped_times_warning
-from .errors import SceneError
+from .errors import SceneError, excerpt
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
 from .scene import TOUCH_TOLERANCE, Scene, Solver, joint_heights, load_scene, replace_solver, solver_with
@@ -126,7 +126,7 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         name = sorted(unknown)[0]
         raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
     if engine not in ENGINES:
-        raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
+        raise SceneError("engine", f"{excerpt(engine)} is not one of {', '.join(ENGINES)}")
     solver = scene.solver
     if rtol is not None or atol is not None or max_steps is not None or t_end is not None or method is not None:
         given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
@@ -139,7 +139,7 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
         for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
-                raise SceneError(name, f"expected True or False, got {flag!r}")
+                raise SceneError(name, f"expected True or False, got {excerpt(flag)}")
     if engine == "c":
         result = phases.run(compile_model(model_spec(scene, solver)), scene, solver, t_eval=times,
                             dense_output=bool(dense_output), record_steps=bool(record_steps))
@@ -160,13 +160,13 @@ def _scene_of(scene: Any) -> Scene:
     if isinstance(scene, (str, os.PathLike)):
         return load_scene(scene)
     raise SceneError("scene", f"simulate() takes a Scene (load_scene, scene_from_dict), a scene file or an "
-                              f"example's name such as 'paper'; got {type(scene).__name__} {scene!r:.60}")
+                              f"example's name such as 'paper'; got {type(scene).__name__} {excerpt(scene)}")
 
 
 def _c_method(method: Any) -> str:
     name = method.lower() if isinstance(method, str) else method
     if name not in C_METHODS:
-        raise SceneError("method", f"{method!r} is not a method of the C engine ({', '.join(C_METHODS)}); "
+        raise SceneError("method", f"{excerpt(method)} is not a method of the C engine ({', '.join(C_METHODS)}); "
                                    "solve_ivp's methods (Radau, LSODA, ...) need engine='reference'")
     return name
 
@@ -177,7 +177,7 @@ def _reference_method(method: Any) -> str:
         return "Radau"
     names = {m.lower(): m for m in METHODS}
     if not isinstance(method, str) or method.lower() not in names:
-        raise SceneError("method", f"{method!r} is not a method of the reference engine "
+        raise SceneError("method", f"{excerpt(method)} is not a method of the reference engine "
                                    f"({', '.join(METHODS)})")
     return names[method.lower()]
 
@@ -187,7 +187,7 @@ def _checked_times(t_eval: Any, solver: Solver) -> np.ndarray:
     try:
         times = np.asarray(t_eval, dtype=float)
     except (TypeError, ValueError):
-        raise SceneError("t_eval", f"expected an array of times in s, got {t_eval!r}") from None
+        raise SceneError("t_eval", f"expected an array of times in s, got {excerpt(t_eval)}") from None
     if times.ndim != 1 or not len(times):
         raise SceneError("t_eval", f"expected a non-empty 1-D array of times, got shape {times.shape}")
     if not np.all(np.isfinite(times)):

@@ -19,7 +19,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from ..engines import simulate
-from ..errors import ImpactgenError, SceneError
+from ..errors import ImpactgenError, SceneError, excerpt
 from ..export import trajectory_columns, write_parquet, write_table
 from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
@@ -340,7 +340,7 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
     into `out` had finished (they are not run again).
     """
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise SceneError("--workers", f"expected a number of worker processes >= 1, got {workers!r}")
+        raise SceneError("--workers", f"expected a number of worker processes >= 1, got {excerpt(workers)}")
     if scheduler not in (None, "local") and workers is not None:
         raise SceneError("--workers", "a Dask cluster at an address has its own workers: give --workers "
                                       "only with no --scheduler or --scheduler local")
