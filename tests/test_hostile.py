@@ -224,3 +224,92 @@ def test_the_command_line_does_not_repeat_a_2_mb_scene_name(tmp_path):
     assert res.returncode == 2
     assert len(res.stderr) < 1000 and len(res.stderr.strip().splitlines()) == 1
     assert f"({HUGE + 2} characters)" in res.stderr  # the quote's size is named
+
+
+# -- issue 45: a sweep's arguments are checked before any case runs; workers are capped -------
+
+SWEEP_VARY = {"initial.u[2]": "uniform(-0.3,-0.2)"}
+BAD_SWEEP_ARGUMENTS = {  # what a hostile caller passed, and the argument the one line names
+    "seed=-1": (dict(seed=-1), "--seed"),
+    "seed='x'": (dict(seed="x"), "--seed"),
+    "seed=2.5": (dict(seed=2.5), "--seed"),
+    "seed=True": (dict(seed=True), "--seed"),
+    "seed=None": (dict(seed=None), "--seed"),
+    "trajectories='all'": (dict(trajectories="all"), "--trajectories"),
+    "trajectories=[0.5]": (dict(trajectories=[0.5]), "--trajectories"),
+    "trajectories=[None]": (dict(trajectories=[None]), "--trajectories"),
+    "trajectories={0: 1}": (dict(trajectories={0: 1}), "--trajectories"),
+    "trajectories=2.0": (dict(trajectories=2.0), "--trajectories"),
+    "out=5": (dict(out=5), "--out"),
+    "out=['a']": (dict(out=["a"]), "--out"),
+    "out=''": (dict(out=""), "--out"),
+    "progress=5": (dict(progress=5), "progress"),
+    "progress='bar'": (dict(progress="bar"), "progress"),
+    "workers=0": (dict(workers=0), "--workers"),
+    "workers=-3": (dict(workers=-3), "--workers"),
+    "workers=2.0": (dict(workers=2.0), "--workers"),
+    "workers='all'": (dict(workers="all"), "--workers"),
+    "scheduler=5": (dict(scheduler=5), "--scheduler"),
+    "random=2.5": (dict(random=2.5), "--random"),
+}
+
+
+@pytest.mark.parametrize("call", list(BAD_SWEEP_ARGUMENTS))
+def test_a_bad_sweep_argument_is_refused_before_any_case_runs(call, monkeypatch):
+    from impactgen.sweep import run as sweep_run
+    ran = []
+    monkeypatch.setattr(sweep_run, "simulate", lambda *a, **k: ran.append(1))  # no case may start
+    arguments, key = BAD_SWEEP_ARGUMENTS[call]
+    arguments = {"random": 2, **arguments}
+    with pytest.raises(SceneError) as caught:
+        impactgen.sweep("paper", vary=SWEEP_VARY, workers=arguments.pop("workers", 1), **arguments)
+    assert caught.value.key == key and "\n" not in str(caught.value)
+    assert not ran
+
+
+@pytest.mark.parametrize("asked, cases", [(10**6, 1), (10**6, 3), (48, 2), (10**18, 5)])
+def test_workers_beyond_the_limit_are_said_not_started(asked, cases, monkeypatch):
+    """A sweep starts at most one worker per case and per usable core, whatever is asked:
+    workers=10**6 had forked until the kernel's out-of-memory killer ended the driver."""
+    from impactgen.sweep import execute, run as sweep_run
+    started = []
+
+    def pool(run_chunk, payload, options, todo, workers):
+        started.append(workers)
+        return execute.in_process(run_chunk, payload, options, todo)
+    monkeypatch.setattr(execute, "process_pool", pool)
+    limit = sweep_run.worker_limit(cases)
+    assert limit <= min(cases, sweep_run.usable_cores())
+    with pytest.warns(impactgen.errors.ImpactgenWarning, match=f"--workers {asked}: starting {limit} worker") as said:
+        table = impactgen.sweep("paper", vary={"initial.u[2]": list(np.linspace(-0.3, -0.2, cases))}, workers=asked)
+    assert len(table) == cases and (table["status"] == "ok").all()
+    assert started in ([], [limit]) and limit < asked  # one process in this process, or a pool of `limit`
+    assert said[0].filename == __file__  # the warning points at the caller's line
+
+
+def test_workers_within_the_limit_start_quietly():
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        table = impactgen.sweep("paper", vary={"initial.u[2]": [-0.3, -0.2]}, workers=1)
+    assert len(table) == 2
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--random", "2", "--seed", "-1"], "--seed: expected a whole number >= 0"),
+    (["--random", "2", "--workers", "0"], "--workers: expected a whole number"),
+])
+def test_a_bad_sweep_argument_on_the_command_line_is_exit_2(args, words):
+    res = _cli("sweep", "paper", "--vary", "initial.u[2]=uniform(-0.3,-0.2)", *args, "--quiet")
+    assert res.returncode == 2, res.stderr
+    assert "Traceback" not in res.stderr and words in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_a_command_line_sweep_of_2_cases_asked_48_workers_starts_at_most_2(tmp_path):
+    res = _cli("sweep", "paper", "--vary", "initial.u[2]=[-0.3,-0.2]", "--workers", "48", "--out",
+               str(tmp_path / "D"), "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "--workers 48: starting" in res.stderr and "Traceback" not in res.stderr
+    started = int(res.stderr.split("starting ")[1].split()[0])
+    assert 1 <= started <= 2

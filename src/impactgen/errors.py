@@ -11,8 +11,10 @@ message of the family is bounded too (`_bounded`): a quote that did not pass thr
 """
 from __future__ import annotations
 
-import reprlib
 import re
+import reprlib
+import sys
+import warnings
 from typing import Any
 
 EXCERPT_CHARS = 80  # characters of a refused value a message quotes
@@ -110,3 +112,16 @@ class SolverError(ImpactgenError, RuntimeError):
         if phase is not None:
             where = f" in phase '{phase}'" + (f" at t = {t:.6g} s" if t is not None else "")
         super().__init__(f"solver failed{where}: {message}")
+
+
+class ImpactgenWarning(UserWarning):
+    """Something asked for was not done as asked, and what was done instead (the work goes on)."""
+
+
+def warn(message: str) -> None:
+    """Warn with `ImpactgenWarning`, attributed to the first caller outside impactgen (the
+    user's line, not the library's)."""
+    level, frame = 2, sys._getframe(1)
+    while frame is not None and frame.f_globals.get("__name__", "").startswith("impactgen."):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, ImpactgenWarning, stacklevel=level)

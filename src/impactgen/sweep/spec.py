@@ -143,6 +143,9 @@ class SweepSpec:
         keys = [a.key for a in axes]
         if len(set(keys)) != len(keys):
             raise SceneError(next(k for k in keys if keys.count(k) > 1), "is varied twice")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise SceneError("--seed", f"expected a whole number >= 0 (numpy's generators take no other), "
+                                       f"got {excerpt(seed)}")
         if isinstance(random, bool) or not isinstance(random, (int, np.integer)) or random < 0:
             raise SceneError("--random", f"expected a number of cases >= 1, got {excerpt(random)}")
         if not random and any(a.distribution for a in axes):
