@@ -313,3 +313,38 @@ def test_a_command_line_sweep_of_2_cases_asked_48_workers_starts_at_most_2(tmp_p
     assert "--workers 48: starting" in res.stderr and "Traceback" not in res.stderr
     started = int(res.stderr.split("starting ")[1].split()[0])
     assert 1 <= started <= 2
+
+
+# -- issue 45: a relative cache folder ---------------------------------------------------------
+
+@pytest.mark.parametrize("given", ["relcache", "./a/../relcache", "relcache/", "~"])
+def test_the_cache_root_is_absolute_whatever_the_variable_says(given, tmp_path, monkeypatch):
+    import os
+    from pathlib import Path
+    from impactgen.build import cache_root
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("IMPACTGEN_CACHE_DIR", given)
+    root = cache_root()
+    assert root.is_absolute()
+    assert root == Path(os.path.expanduser(given)).resolve() if given == "~" else root == tmp_path / "relcache"
+
+
+def test_a_relative_xdg_cache_home_is_ignored_as_the_xdg_spec_says(tmp_path, monkeypatch):
+    from pathlib import Path
+    from impactgen.build import cache_root
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("IMPACTGEN_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative")
+    assert cache_root() == Path.home() / ".cache" / "impactgen"
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache_root() == tmp_path / "xdg" / "impactgen"
+
+
+def test_a_run_with_a_relative_cache_folder_builds(tmp_path):
+    import subprocess
+    import sys
+    res = subprocess.run([sys.executable, "-m", "impactgen.cli", "run", "paper", "--json"], capture_output=True,
+                         text=True, timeout=600, cwd=tmp_path,
+                         env={**__import__("os").environ, "IMPACTGEN_CACHE_DIR": "relcache"})
+    assert res.returncode == 0, res.stderr
+    assert any((tmp_path / "relcache").iterdir())
