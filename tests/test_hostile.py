@@ -348,3 +348,76 @@ def test_a_run_with_a_relative_cache_folder_builds(tmp_path):
                          env={**__import__("os").environ, "IMPACTGEN_CACHE_DIR": "relcache"})
     assert res.returncode == 0, res.stderr
     assert any((tmp_path / "relcache").iterdir())
+
+
+# -- issue 45: t_eval takes real times only, of a count that fits in memory; sol unasked -------
+
+NOT_REAL_TIMES = {
+    "complex list": [0.0, 1e-4 + 0j],
+    "complex array": np.array([0.0, 1e-4 + 1e-9j]),
+    "strings of numbers": ["0.0", "1e-4"],
+    "a string array": np.array(["0.0", "1e-4"]),
+    "one string in floats": [0.0, "1e-4"],
+    "bools": [False, True],
+    "a bool array": np.array([False, True]),
+    "a bool in floats": [0.0, True],
+    "a numpy bool in floats": (0.0, np.bool_(True)),
+    "an object array with a bool": np.array([0.0, True], dtype=object),
+    "None in floats": [0.0, None],
+    "bytes": [b"0.0"],
+    "datetimes": np.array(["2020-01-01"], dtype="datetime64[D]"),
+    "a bare string": "0.0001",
+    "a bare bool": True,
+    "a set": {0.0, 1e-4},
+    "a dict": {0.0: 1e-4},
+}
+
+
+@pytest.mark.parametrize("name", list(NOT_REAL_TIMES))
+@pytest.mark.parametrize("engine", ["c", "reference"])
+def test_t_eval_of_what_is_not_a_real_time_is_refused(name, engine, paper_scene):
+    with pytest.raises(SceneError) as caught:
+        impactgen.simulate(paper_scene, engine=engine, t_eval=NOT_REAL_TIMES[name])
+    assert caught.value.key == "t_eval" and "\n" not in str(caught.value)
+
+
+def test_t_eval_of_real_numbers_in_any_container_still_works(paper_scene):
+    from fractions import Fraction
+    expected = impactgen.simulate(paper_scene, t_eval=[0.0, 1e-4]).y
+    for times in ([0, 1e-4], (0.0, 1e-4), np.array([0.0, 1e-4], dtype=object), [0, Fraction(1, 10000)],
+                  [np.float64(0.0), np.float64(1e-4)], np.array([0, 1]) * 1e-4):
+        np.testing.assert_array_equal(impactgen.simulate(paper_scene, t_eval=times).y, expected)
+
+
+@pytest.mark.parametrize("times", [np.broadcast_to(0.0, (10**9,)), range(10**10)])
+def test_a_t_eval_beyond_memory_is_refused_up_front_naming_the_size(times, paper_scene):
+    """10^8 times had run 15 s and died of numpy's MemoryError; these cost no memory to pass
+    (a broadcast view, a range) and would need hundreds of GB of samples."""
+    with pytest.raises(SceneError, match=r"times need about [0-9.]+ [kMGT]B for their samples, more than the "
+                                         r"[0-9.]+ [kMGT]?B of memory available") as caught:
+        impactgen.simulate(paper_scene, t_eval=times)
+    assert caught.value.key == "t_eval"
+
+
+def test_the_memory_estimate_grows_with_the_chain_and_refuses_at_the_limit(paper_scene, monkeypatch):
+    from impactgen import engines
+    chain6 = impactgen.load_scene("falling-chain")
+    assert engines.sample_bytes(chain6) > engines.sample_bytes(paper_scene) > 8 * 20
+    times = np.linspace(0.0, 1e-4, 1000)
+    monkeypatch.setattr(engines, "available_memory", lambda: 1000 * engines.sample_bytes(paper_scene))
+    assert len(impactgen.simulate(paper_scene, t_eval=times).t) == 1000  # just fits
+    monkeypatch.setattr(engines, "available_memory", lambda: 999 * engines.sample_bytes(paper_scene))
+    with pytest.raises(SceneError, match="1000 times need about"):
+        impactgen.simulate(paper_scene, t_eval=times)
+
+
+@pytest.mark.parametrize("engine", ["c", "reference"])
+def test_dense_output_not_asked_for_says_how_to_ask(engine, paper_scene):
+    r = impactgen.simulate(paper_scene, engine=engine)
+    assert not r.sol
+    for t in (1e-4, [0.0, 1e-4], None):
+        with pytest.raises(SceneError, match=r"no dense output \(it was not asked for\): "
+                                             r"simulate\(\.\.\., dense_output=True\)"):
+            r.sol(t)
+    import pickle
+    assert not pickle.loads(pickle.dumps(r)).sol

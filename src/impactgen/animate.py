@@ -86,7 +86,7 @@ def angles_at(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     """q at `times`, shape (n, len(times)): from the dense output if the run kept it, else
     interpolated linearly between the samples."""
     n = result.n
-    if result.sol is not None:
+    if result.sol:
         return np.asarray(result.sol(np.clip(times, result.sol.t_min, result.sol.t_max)))[:n]
     return np.vstack([np.interp(times, result.t, result.q[i]) for i in range(n)])
 

@@ -90,6 +90,25 @@ class DenseSolution:
         return out[:, 0] if times.ndim == 0 else out
 
 
+class NoDenseOutput:
+    """`result.sol` of a run that kept no dense output: false in a test, and calling it says
+    how to ask for it (it was None, whose call said only "'NoneType' object is not callable")."""
+
+    def __bool__(self) -> bool:
+        return False
+
+    def __call__(self, t: object = None) -> np.ndarray:
+        raise SceneError("dense_output", "this run kept no dense output (it was not asked for): "
+                                         "simulate(..., dense_output=True) keeps it, so that result.sol(t) "
+                                         "gives y at any time of the run")
+
+    def __repr__(self) -> str:
+        return "NoDenseOutput()"
+
+
+NO_DENSE_OUTPUT = NoDenseOutput()
+
+
 OutputsAt = Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]]  # (t (m,), y (m, n_states))
 
 
