@@ -421,3 +421,49 @@ def test_dense_output_not_asked_for_says_how_to_ask(engine, paper_scene):
             r.sol(t)
     import pickle
     assert not pickle.loads(pickle.dumps(r)).sol
+
+
+# -- issue 45: the rules across parameters are one list, for the scene and the generated C -----
+
+def _unchecked(scene, key: str, value: float):
+    """`scene` with one material value changed and no checks run (as a caller of the C model,
+    or an FMU importer, can have it)."""
+    import dataclasses
+    section, field = key.split(".")
+    field = {"yield_strength": "yield_strength", "E": "E"}[field]
+    material = dataclasses.replace(getattr(scene, section), **{field: value})
+    return dataclasses.replace(scene, **{section: material})
+
+
+def _breaking_values(scene):
+    from impactgen.codegen.parameters import BY_NAME, RULES
+    for rule in RULES:
+        low, high = BY_NAME[rule.below].value(scene), BY_NAME[rule.above].value(scene)
+        yield rule, rule.key, high  # at the bound
+        yield rule, rule.key, 3.0 * high
+        yield rule, rule.above_key, 0.9 * low
+
+
+def test_load_scene_refuses_what_the_rule_list_refuses_in_the_same_words(paper_scene):
+    from impactgen.codegen.parameters import broken_rule
+    assert broken_rule(paper_scene) is None
+    for rule, key, value in _breaking_values(paper_scene):
+        with pytest.raises(SceneError) as refused:
+            impactgen.load_scene("paper", overrides={key: value})
+        found = broken_rule(_unchecked(paper_scene, key, value))
+        assert found is not None and found[0] == rule
+        assert refused.value.key == rule.key and str(refused.value) == f"{rule.key}: {found[1]}"
+
+
+def test_the_c_model_refuses_what_the_rule_list_refuses(paper_scene):
+    """The generated start check (`model_derive`, which an FMU's initialization runs) prints
+    the same rule list: values that never passed load_scene are refused, naming the key."""
+    from impactgen.build import compile_model
+    from impactgen.engines import model_spec
+    from impactgen.model_params import fill_params
+    model = compile_model(model_spec(paper_scene))
+    fill_params(model, paper_scene)
+    for rule, key, value in _breaking_values(paper_scene):
+        with pytest.raises(SceneError, match="is not physical") as refused:
+            fill_params(model, _unchecked(paper_scene, key, value))
+        assert refused.value.key == rule.key
