@@ -370,6 +370,7 @@ NOT_REAL_TIMES = {
     "a bare bool": True,
     "a set": {0.0, 1e-4},
     "a dict": {0.0: 1e-4},
+    "a masked time": np.ma.masked_array([0.0, 1e-4], mask=[False, True]),
 }
 
 

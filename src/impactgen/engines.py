@@ -199,6 +199,9 @@ def _checked_times(t_eval: Any, scene: Scene, solver: Solver) -> np.ndarray:
     except TypeError:  # a numpy scalar, say
         count = 1
     _check_memory(count, scene)
+    if np.ma.isMaskedArray(t_eval) and np.ma.getmaskarray(t_eval).any():  # np.asarray would drop the mask
+        raise SceneError("t_eval", "expected times in s, got a masked array with masked times: give only the "
+                                   "times wanted (t_eval.compressed())")
     try:
         given = np.asarray(t_eval)
     except (TypeError, ValueError):  # a ragged list
