@@ -19,7 +19,7 @@ from sympy.printing.c import C99CodePrinter
 from . import contact as law
 from . import machine
 from .expressions import ModelExpressions, assemble_model
-from .parameters import Field
+from .parameters import RULES, Field
 from .spec import PHASES, STATE_LAW, STATES, ModelSpec
 
 PHASE_CODES = {name: code for code, name in enumerate(PHASES)}
@@ -150,6 +150,7 @@ def _templates() -> jinja2.Environment:
     env = jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined,
                              keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
     env.filters.update(c_double=_c_double, c_string=_c_string, range_test=_range_test)
+    env.globals.update(rules=RULES)  # the rules across inputs, printed into the start check
     return env
 
 

@@ -4,7 +4,9 @@ Each row says what a parameter is (C field and sympy symbol `name`, unit, descri
 scene sets it (`key`, its dotted scene key, and `read`), who sets it (`kind`) and its FMI
 causality. The C parameter struct, the filling from a scene, the FMU's modelDescription.xml,
 the bounds the C checks and the parameter table of docs/embedding.md are all printed from
-this table, so the names never have to agree by string.
+this table, so the names never have to agree by string. The rules across inputs (a yield
+strength below its modulus) are one table too, `RULES`, which the scene checks and the C
+start check both apply.
 
 Kinds:
 - "input": the scene sets it (an FMI parameter);
@@ -134,6 +136,54 @@ PARAMETERS: tuple[Parameter, ...] = (
 )
 
 BY_NAME = {p.name: p for p in PARAMETERS}
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A physical rule across two inputs that their own ranges cannot state: `below` must lie
+    below `above` (C fields of the table). The one list of such rules (RULES): the scene
+    checks apply it (`broken_rule`, the same key and words as load_scene's refusal), and the
+    generated C's start check (`<prefix>_derive`, so an FMU's fmi2ExitInitializationMode)
+    prints it, naming `below`'s variable."""
+
+    below: str  # the input named when the rule is broken (its scene key is the key of the error)
+    above: str
+    ratio: str  # what below/above means, e.g. "a yield strain S_y/E"
+
+    @property
+    def key(self) -> str:
+        return BY_NAME[self.below].key
+
+    @property
+    def above_key(self) -> str:
+        return BY_NAME[self.above].key
+
+    def message(self, low: float, high: float) -> str:
+        """Why values `low` (of `below`) and `high` (of `above`) break the rule."""
+        return f"must be below {self.above_key} ({self.ratio} = {low / high:.3g} >= 1 is not physical)"
+
+    def range_text(self) -> str:
+        """The rule as the C check states it after the value (`<prefix>_derive`'s range_text)."""
+        return f"< {self.above_key} ({self.ratio} >= 1 is not physical)"
+
+    def c_test(self, struct: str = "p->") -> str:
+        """The C condition that the rule holds."""
+        return f"{struct}{self.below} < {struct}{self.above}"
+
+
+RULES: tuple[Rule, ...] = (
+    Rule("S_y_rod", "E_rod", "a yield strain S_y/E"),
+    Rule("S_y_surface", "E_surface", "a yield strain S_y/E"),
+)
+
+
+def broken_rule(scene: Any) -> tuple[Rule, str] | None:
+    """The first rule of RULES that `scene`'s values break, and why (the error's words), or None."""
+    for rule in RULES:
+        low, high = BY_NAME[rule.below].value(scene), BY_NAME[rule.above].value(scene)
+        if not low < high:
+            return rule, rule.message(low, high)
+    return None
 
 
 def included(p: Parameter, friction_law: str, used: set[str]) -> bool:

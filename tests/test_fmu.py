@@ -314,3 +314,147 @@ def test_null_arrays_are_an_error_not_a_crash(fmus, tmp_path, kind):
         assert lib.fmi2NewDiscreteStates(c, None) == 3
     assert messages and all(b"is NULL" in m for m in messages)
     fmu.freeInstance()
+
+
+# -- issue 45: the scene's rules across parameters, and times that are not finite or go back ---
+
+def _instance(path: Path, folder: Path, kind: str, messages: list[str]):
+    """An instance of the FMU at `path` with a logger that keeps its error messages."""
+    from fmpy.fmi2 import FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, \
+        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, calloc, free
+    md = read_model_description(str(path))
+    if not folder.exists():
+        with zipfile.ZipFile(path) as z:
+            z.extractall(folder)
+    cls, model = (FMU2Model, md.modelExchange) if kind == "ModelExchange" else (FMU2Slave, md.coSimulation)
+    fmu = cls(guid=md.guid, unzipDirectory=str(folder), modelIdentifier=model.modelIdentifier, instanceName="x")
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(
+        lambda env, name, status, category, text: messages.append(text.decode()) if status >= 3 else None)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    fmu.instantiate(callbacks=callbacks, loggingOn=True)
+    fmu._keep = callbacks  # the logger lives as long as the instance
+    return fmu, {v.name: v.valueReference for v in md.modelVariables}
+
+
+def _scene_value(key: str) -> float:
+    from impactgen.codegen.parameters import BY_NAME
+    scene = impactgen.load_scene("paper")
+    return next(p for p in BY_NAME.values() if p.key == key).value(scene)
+
+
+def _rule_breaking_starts():
+    """For every rule across parameters (codegen/parameters.py, RULES), values that break it:
+    the lower input at, and above, the upper one; the upper one lowered under the lower."""
+    from impactgen.codegen.parameters import RULES
+    starts = []
+    for rule in RULES:
+        high = _scene_value(rule.above_key)
+        low = _scene_value(rule.key)
+        starts += [(rule.key, {rule.key: high}), (rule.key, {rule.key: 1.5 * high}),
+                   (rule.key, {rule.above_key: 0.5 * low})]
+    return starts
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("key, start", _rule_breaking_starts())
+def test_every_rule_across_parameters_load_scene_applies_is_applied_at_initialization(fmus, tmp_path, kind,
+                                                                                       key, start):
+    """rod.yield_strength = 3e11 (above rod.E) had passed fmi2SetReal, initialization and
+    fmi2DoStep. Now the FMU refuses, at fmi2ExitInitializationMode, what load_scene refuses,
+    from the same rule list and naming the same key. fmi2SetReal takes each value (values set
+    one at a time may break a rule on the way to a valid start)."""
+    with pytest.raises(impactgen.SceneError) as refused:
+        impactgen.load_scene("paper", overrides=start)
+    assert refused.value.key == key
+    messages: list[str] = []
+    fmu, vr = _instance(fmus["paper"], tmp_path / "u", kind, messages)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr[k] for k in start], list(start.values()))
+    assert messages == []
+    with pytest.raises(Exception):
+        fmu.exitInitializationMode()
+    assert messages and messages[-1].startswith(f"{key} = ") and "is not physical" in messages[-1], messages
+    fmu.freeInstance()
+
+
+def test_a_rule_broken_on_the_way_to_a_valid_start_is_not_refused(fmus, tmp_path):
+    """Raise the yield strength above the old modulus first, then the modulus: valid at the end."""
+    e_rod = _scene_value("rod.E")
+    messages: list[str] = []
+    fmu, vr = _instance(fmus["paper"], tmp_path / "u", "CoSimulation", messages)
+    fmu.setupExperiment(startTime=0.0, stopTime=1e-4)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr["rod.yield_strength"]], [2.0 * e_rod])
+    fmu.setReal([vr["rod.E"]], [4.0 * e_rod])
+    fmu.exitInitializationMode()
+    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-4)
+    assert messages == []
+    fmu.freeInstance()
+
+
+BAD_EXPERIMENTS = [  # fmi2SetupExperiment arguments, and a word of the logged message
+    (dict(startTime=float("nan")), "start time"),
+    (dict(startTime=float("inf")), "start time"),
+    (dict(startTime=0.0, stopTime=float("nan")), "stop time"),
+    (dict(startTime=1.0, stopTime=0.5), "stop time"),
+    (dict(startTime=0.0, tolerance=float("nan")), "tolerance"),
+]
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("arguments, words", BAD_EXPERIMENTS)
+def test_a_start_or_stop_time_that_is_not_finite_is_an_error(fmus, tmp_path, kind, arguments, words):
+    messages: list[str] = []
+    fmu, _ = _instance(fmus["paper"], tmp_path / "u", kind, messages)
+    with pytest.raises(Exception):
+        fmu.setupExperiment(**arguments)
+    assert messages and words in messages[-1]
+    fmu.freeInstance()
+
+
+def test_a_co_simulation_step_from_a_time_that_is_not_the_current_one_is_an_error(fmus, tmp_path):
+    """After a refused fmi2DoStep(5.0, ...), fmi2DoStep(NaN, 1e-4) had returned OK."""
+    messages: list[str] = []
+    fmu, vr = _instance(fmus["paper"], tmp_path / "u", "CoSimulation", messages)
+    fmu.setupExperiment(tolerance=RTOL, startTime=0.0, stopTime=1e-3)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-4)
+    for t, h in ((5.0, 1e-4), (float("nan"), 1e-4), (1e-4, float("nan")), (1e-4, float("inf")),
+                 (float("-inf"), 1e-4), (0.0, 1e-4), (1e-4, -1e-5), (2e-4, 1e-4)):
+        count = len(messages)
+        with pytest.raises(Exception):
+            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        assert len(messages) == count + 1 and "fmi2DoStep" in messages[-1], (t, h, messages[-1:])
+    before = fmu.getReal([vr["u[2]"]])
+    fmu.doStep(currentCommunicationPoint=1e-4, communicationStepSize=1e-4)  # the right time still steps
+    assert fmu.getReal([vr["u[2]"]]) != before
+    fmu.freeInstance()
+
+
+def test_model_exchange_time_that_is_not_finite_or_goes_back_is_an_error(fmus, tmp_path):
+    """fmi2SetTime(-1.0) after fmi2SetTime(1e-3), and fmi2SetTime(NaN), had returned OK. An
+    integrator may still go back within its step (a retried step, a root search)."""
+    messages: list[str] = []
+    fmu, _ = _instance(fmus["paper"], tmp_path / "u", "ModelExchange", messages)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    fmu.setTime(1e-3)
+    for t in (-1.0, float("nan"), float("inf"), -1e-300):
+        with pytest.raises(Exception):
+            fmu.setTime(t)
+        assert "fmi2SetTime" in messages[-1]
+    fmu.setTime(5e-4)  # back within the step: allowed
+    fmu.setTime(1e-6)
+    fmu.completedIntegratorStep()
+    with pytest.raises(Exception):
+        fmu.setTime(5e-7)  # before the completed step
+    assert "before the last completed step" in messages[-1]
+    fmu.setTime(2e-6)
+    fmu.freeInstance()

@@ -52,3 +52,46 @@ def test_report_compares_stiff_friction_with_coulomb(tmp_path):
     line = next(x for x in text.splitlines() if x.startswith("| 0.5 | bdf"))
     ratio = float(line.split("|")[-2])
     assert 1.0 <= ratio < 10.0  # the stiff regularization costs more steps, within the target
+
+
+def test_resting_contact_is_in_the_catalogue_against_the_reference_engine():
+    from impactgen.stability import RESTING, catalogue
+    assert RESTING in catalogue() and RESTING in catalogue(quick=True)
+    assert RESTING.against_reference and RESTING.overrides["initial.u"] == [0.0, 0.0, 0.0]
+
+
+@pytest.fixture(scope="module")
+def resting_rows():
+    from impactgen.stability import resting_contact_rows
+    return resting_contact_rows()
+
+
+def test_every_method_on_the_resting_tip_agrees_with_the_reference_engine(resting_rows):
+    """A 3-link chain released at rest with its tip resting in compliant contact: each method
+    of the C engine, at each tolerance, ends ok with a first delta_max the reference engine
+    confirms; at rtol 1e-10 the explicit pair (the default's) within 1e-8, BDF within 1e-6."""
+    from impactgen.stability import RESTING_METHODS, RESTING_RTOLS
+    assert len(resting_rows) == len(RESTING_METHODS) * len(RESTING_RTOLS)
+    error = {row["setting"]: row["reference_error"] for row in resting_rows}
+    for row in resting_rows:  # (at rtol 1e-6 the energy budget may miss its 1e-6 check)
+        assert row["status"] == "ok" or row["setting"].endswith("1e-06"), row
+        assert row["impacts"] == 1 and row["reference_error"] < 1e-3, row
+    for method in RESTING_METHODS:
+        assert error[f"{method}, rtol 1e-10"] < 1e-6, method
+    assert error["auto, rtol 1e-10"] < 1e-8
+    assert error["bdf, rtol 1e-10"] < error["bdf, rtol 1e-06"] / 100  # BDF's error falls with the tolerance
+
+
+def test_the_report_has_the_resting_contact_table(resting_rows, tmp_path):
+    from impactgen.stability import write_report
+    text = write_report(resting_rows, tmp_path, quick=False).read_text()
+    assert "## Resting contact against the reference engine" in text
+    assert any(line.startswith("| bdf | ") for line in text.splitlines())
+
+
+def test_a_start_at_rest_has_its_energy_budget_against_the_largest_work():
+    """T0 = 0 for a chain released at rest: the budget is relative to the largest work (it
+    was relative to 1e-300, and every method 'failed' the check by 1e+290)."""
+    from impactgen.stability import RESTING
+    row = run_case(RESTING, "auto, rtol 1e-8")
+    assert row["status"] == "ok" and row["budget_error"] < 1e-6, row

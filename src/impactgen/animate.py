@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError
+from .errors import SceneError, excerpt
 from .plots import PHASE_COLOURS, _pyplot
 from .results import SimulationResult, point_number
 from .scene import TOUCH_TOLERANCE, joint_heights
@@ -86,7 +86,7 @@ def angles_at(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     """q at `times`, shape (n, len(times)): from the dense output if the run kept it, else
     interpolated linearly between the samples."""
     n = result.n
-    if result.sol is not None:
+    if result.sol:
         return np.asarray(result.sol(np.clip(times, result.sol.t_min, result.sol.t_max)))[:n]
     return np.vstack([np.interp(times, result.t, result.q[i]) for i in range(n)])
 
@@ -146,7 +146,7 @@ def check_output(path: Path, fps: int = DEFAULT_FPS, seconds: float = DEFAULT_SE
     _pyplot()
     suffix = path.suffix.lower()
     if suffix not in WRITERS:
-        raise SceneError("--out", f"cannot write a {suffix or 'suffix-less'} file {path.name!r}: "
+        raise SceneError("--out", f"cannot write a {suffix or 'suffix-less'} file {excerpt(path.name)}: "
                                   "give a .gif or .mp4 file")
     if not _writer_available(WRITERS[suffix]):
         raise SceneError("--out", f"writing {path.name} needs ffmpeg, which is not installed: install "
@@ -192,9 +192,9 @@ def animate(result: SimulationResult, path: str | Path, *, fps: int = DEFAULT_FP
     path = Path(path)
     frames = check_output(path, fps, seconds)
     if not 0.0 < impact_share < 1.0:
-        raise SceneError("impact_share", f"expected a share between 0 and 1, got {impact_share!r}")
+        raise SceneError("impact_share", f"expected a share between 0 and 1, got {excerpt(impact_share)}")
     if not isinstance(dpi, (int, np.integer)) or dpi < 1:
-        raise SceneError("dpi", f"expected a whole number of dots per inch >= 1, got {dpi!r}")
+        raise SceneError("dpi", f"expected a whole number of dots per inch >= 1, got {excerpt(dpi)}")
     if len(result.t) < 2 or not result.t[-1] > result.t[0]:
         raise SceneError(None, f"the run ended at its first sample (t = {result.t[0]:g} s): nothing to animate"
                                + (f"; {result.message}" if result.message else ""))
@@ -218,9 +218,9 @@ def animate(result: SimulationResult, path: str | Path, *, fps: int = DEFAULT_FP
 
 def _frame_count(fps: int, seconds: float) -> int:
     if not isinstance(fps, (int, np.integer)) or fps < 1:
-        raise SceneError("--fps", f"expected a whole number of frames per second >= 1, got {fps!r}")
+        raise SceneError("--fps", f"expected a whole number of frames per second >= 1, got {excerpt(fps)}")
     if not (isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0):
-        raise SceneError("--seconds", f"expected a length in seconds > 0, got {seconds!r}")
+        raise SceneError("--seconds", f"expected a length in seconds > 0, got {excerpt(seconds)}")
     frames = max(2, round(fps * seconds))
     if frames > MAX_FRAMES:
         raise SceneError("--seconds", f"{fps} fps for {seconds:g} s is {frames} frames, more than "

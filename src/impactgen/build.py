@@ -81,11 +81,17 @@ class CompiledModel:
 
 
 def cache_root() -> Path:
+    """The cache folder, always an absolute path: IMPACTGEN_CACHE_DIR (a relative one, or one
+    starting with ~, taken from the working folder or the home folder), else
+    $XDG_CACHE_HOME/impactgen, else ~/.cache/impactgen. cffi compiles from inside the
+    entry's temporary folder, where a relative path names nothing (cc1: No such file)."""
     root = os.environ.get("IMPACTGEN_CACHE_DIR")
     if root:
-        return Path(root)
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "impactgen"
+        return Path(os.path.abspath(os.path.expanduser(root)))
+    base = os.environ.get("XDG_CACHE_HOME", "")
+    if not os.path.isabs(base):  # unset, or relative: the XDG spec says to ignore a relative one
+        base = str(Path.home() / ".cache")
+    return Path(os.path.abspath(base)) / "impactgen"
 
 
 def _native(name: str) -> str:

@@ -12,7 +12,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .errors import SceneError
+from .errors import SceneError, excerpt
 
 Interpolant = Callable[[np.ndarray], np.ndarray]  # times (m,) -> states (n_states, m)
 
@@ -73,14 +73,14 @@ class DenseSolution:
         try:
             times = np.asarray(t, dtype=float)
         except (TypeError, ValueError):
-            raise SceneError("t", f"expected a time or an array of times in s, got {t!r:.60}") from None
+            raise SceneError("t", f"expected a time or an array of times in s, got {excerpt(t)}") from None
         flat = np.atleast_1d(times).ravel()
         if not self.pieces:
             raise SceneError("t", "this run has no dense output: it ended at its first point")
         slack = END_SLACK * max(1.0, abs(self.t_max))
         outside = ~((flat >= self.t_min - slack) & (flat <= self.t_max + slack))  # NaN included
         if outside.any():
-            raise SceneError("t", f"{flat[outside][0]!r} s is outside the run [{self.t_min:.17g}, "
+            raise SceneError("t", f"{excerpt(flat[outside][0])} s is outside the run [{self.t_min:.17g}, "
                                   f"{self.t_max:.17g}] s; dense output does not extrapolate")
         out = np.empty((self.n_states, len(flat)))
         which = np.clip(np.searchsorted(self.breaks, flat, side="left") - 1, 0, len(self.pieces) - 1)
@@ -88,6 +88,25 @@ class DenseSolution:
             mask = which == i
             out[:, mask] = self.pieces[i](flat[mask])
         return out[:, 0] if times.ndim == 0 else out
+
+
+class NoDenseOutput:
+    """`result.sol` of a run that kept no dense output: false in a test, and calling it says
+    how to ask for it (it was None, whose call said only "'NoneType' object is not callable")."""
+
+    def __bool__(self) -> bool:
+        return False
+
+    def __call__(self, t: object = None) -> np.ndarray:
+        raise SceneError("dense_output", "this run kept no dense output (it was not asked for): "
+                                         "simulate(..., dense_output=True) keeps it, so that result.sol(t) "
+                                         "gives y at any time of the run")
+
+    def __repr__(self) -> str:
+        return "NoDenseOutput()"
+
+
+NO_DENSE_OUTPUT = NoDenseOutput()
 
 
 OutputsAt = Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]]  # (t (m,), y (m, n_states))

@@ -12,9 +12,9 @@ import numpy as np
 
 from . import phases
 from .build import compile_model
-from .codegen.spec import ModelSpec
+from .codegen.spec import STATES, ModelSpec
 from .dense import dropped_times_warning
-from .errors import SceneError
+from .errors import SceneError, excerpt
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
 from .scene import TOUCH_TOLERANCE, Scene, Solver, joint_heights, load_scene, replace_solver, solver_with
@@ -83,8 +83,9 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
     t_end : float or "separation", optional
         Overrides solver.t_end: a time in s runs through every later impact.
     t_eval : array_like, optional
-        Sorted times in s at which to return the solution (read from the integrator's own
-        interpolating polynomial, as solve_ivp does). Times after the run's end (the first
+        Sorted real times in s at which to return the solution (read from the integrator's
+        own interpolating polynomial, as solve_ivp does); bools, strings and complex numbers
+        are refused, and so is a count whose samples would not fit in the memory available. Times after the run's end (the first
         separation) are left out, as solve_ivp does after a terminal event, and
         ``result.warnings`` says how many and when the run ended. Without it, the samples are every integrator step.
     dense_output : bool, default False
@@ -126,7 +127,7 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         name = sorted(unknown)[0]
         raise SceneError(name, f"unknown option of simulate(); the options are {', '.join(OPTIONS)}")
     if engine not in ENGINES:
-        raise SceneError("engine", f"{engine!r} is not one of {', '.join(ENGINES)}")
+        raise SceneError("engine", f"{excerpt(engine)} is not one of {', '.join(ENGINES)}")
     solver = scene.solver
     if rtol is not None or atol is not None or max_steps is not None or t_end is not None or method is not None:
         given = {"rtol": rtol, "atol": atol, "max_steps": max_steps, "t_end": t_end}
@@ -135,11 +136,11 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
             settings["method"] = _c_method(method)
         if settings:  # only the values given are checked: the rest of the scene was checked already
             solver = solver_with(scene, settings)
-    times = _checked_times(t_eval, solver) if t_eval is not None else None
+    times = _checked_times(t_eval, scene, solver) if t_eval is not None else None
     if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
         for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
-                raise SceneError(name, f"expected True or False, got {flag!r}")
+                raise SceneError(name, f"expected True or False, got {excerpt(flag)}")
     if engine == "c":
         result = phases.run(compile_model(model_spec(scene, solver)), scene, solver, t_eval=times,
                             dense_output=bool(dense_output), record_steps=bool(record_steps))
@@ -160,13 +161,13 @@ def _scene_of(scene: Any) -> Scene:
     if isinstance(scene, (str, os.PathLike)):
         return load_scene(scene)
     raise SceneError("scene", f"simulate() takes a Scene (load_scene, scene_from_dict), a scene file or an "
-                              f"example's name such as 'paper'; got {type(scene).__name__} {scene!r:.60}")
+                              f"example's name such as 'paper'; got {type(scene).__name__} {excerpt(scene)}")
 
 
 def _c_method(method: Any) -> str:
     name = method.lower() if isinstance(method, str) else method
     if name not in C_METHODS:
-        raise SceneError("method", f"{method!r} is not a method of the C engine ({', '.join(C_METHODS)}); "
+        raise SceneError("method", f"{excerpt(method)} is not a method of the C engine ({', '.join(C_METHODS)}); "
                                    "solve_ivp's methods (Radau, LSODA, ...) need engine='reference'")
     return name
 
@@ -177,17 +178,46 @@ def _reference_method(method: Any) -> str:
         return "Radau"
     names = {m.lower(): m for m in METHODS}
     if not isinstance(method, str) or method.lower() not in names:
-        raise SceneError("method", f"{method!r} is not a method of the reference engine "
+        raise SceneError("method", f"{excerpt(method)} is not a method of the reference engine "
                                    f"({', '.join(METHODS)})")
     return names[method.lower()]
 
 
-def _checked_times(t_eval: Any, solver: Solver) -> np.ndarray:
-    """t_eval as a sorted 1-D array of finite times within the run."""
+NOT_TIMES = (bool, np.bool_, str, bytes, complex, np.complexfloating)  # what np.asarray(dtype=float) took silently
+SAMPLE_COPIES = 2  # the samples at t_eval exist twice at the end of a run: per segment, and joined
+PHASE_LABEL_BYTES = 4 * max(len(name) for name in STATES)  # each sample's phase, a numpy str
+
+
+def _checked_times(t_eval: Any, scene: Scene, solver: Solver) -> np.ndarray:
+    """t_eval as a sorted 1-D array of finite real times within the run, of a size whose
+    samples fit in memory. Numbers only: a bool, a string of digits or a complex number
+    (whose imaginary part numpy drops) is refused, not read as a time."""
+    if isinstance(t_eval, NOT_TIMES) or not hasattr(t_eval, "__len__") and not hasattr(t_eval, "__array__"):
+        raise SceneError("t_eval", f"expected an array of times in s, got {type(t_eval).__name__} {excerpt(t_eval)}")
     try:
-        times = np.asarray(t_eval, dtype=float)
+        count = len(t_eval)
+    except TypeError:  # a numpy scalar, say
+        count = 1
+    _check_memory(count, scene)
+    if np.ma.isMaskedArray(t_eval) and np.ma.getmaskarray(t_eval).any():  # np.asarray would drop the mask
+        raise SceneError("t_eval", "expected times in s, got a masked array with masked times: give only the "
+                                   "times wanted (t_eval.compressed())")
+    try:
+        given = np.asarray(t_eval)
+    except (TypeError, ValueError):  # a ragged list
+        raise SceneError("t_eval", f"expected an array of times in s (real numbers), got {excerpt(t_eval)}") from None
+    # a list's elements, and an object array's, are looked at one by one: numpy makes
+    # [0.5, True] an array of floats
+    items = t_eval if isinstance(t_eval, (list, tuple)) else given.ravel() if given.dtype.kind == "O" else ()
+    bad = next((x for x in items if x is None or isinstance(x, NOT_TIMES)), 0.0)
+    if bad is None or isinstance(bad, NOT_TIMES):
+        raise SceneError("t_eval", f"expected times in s (real numbers), got {type(bad).__name__} {excerpt(bad)}")
+    try:
+        if given.dtype.kind not in "iufO":  # bool, complex, str, bytes, datetime, ...
+            raise TypeError(given.dtype)
+        times = given.astype(float, copy=False)
     except (TypeError, ValueError):
-        raise SceneError("t_eval", f"expected an array of times in s, got {t_eval!r}") from None
+        raise SceneError("t_eval", f"expected an array of times in s (real numbers), got {excerpt(t_eval)}") from None
     if times.ndim != 1 or not len(times):
         raise SceneError("t_eval", f"expected a non-empty 1-D array of times, got shape {times.shape}")
     if not np.all(np.isfinite(times)):
@@ -200,6 +230,51 @@ def _checked_times(t_eval: Any, solver: Solver) -> np.ndarray:
         raise SceneError("t_eval", f"times must lie in [0, {what} = {end:g} s], got "
                                    f"[{times[0]:g}, {times[-1]:g}]")
     return times
+
+
+def sample_bytes(scene: Scene) -> int:
+    """Bytes a run of `scene` keeps per sample at a t_eval time: the time, the states (the
+    angles, the speeds, and each contact point's works and impulses), the outputs (the tip's
+    eight, a kinetic energy per link and the two totals, six per joint with contact) and the
+    phase label, SAMPLE_COPIES times."""
+    n, points = scene.n, 1 + len(reachable_joints(scene))
+    states, outputs = 2 * n + 4 * points, 8 + n + 2 + 6 * (points - 1)
+    return SAMPLE_COPIES * (8 * (1 + states + outputs) + PHASE_LABEL_BYTES)
+
+
+def available_memory() -> int | None:
+    """Bytes of memory this process could still take (Linux's MemAvailable; elsewhere the
+    physical memory), or None where the system does not say."""
+    try:
+        with open("/proc/meminfo") as info:
+            for line in info:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _check_memory(count: int, scene: Scene) -> None:
+    """Refuse, before any work, a t_eval whose samples will not fit in memory, naming the size
+    (10^8 times had run 15 s and ended in numpy's MemoryError)."""
+    need = count * sample_bytes(scene)
+    have = available_memory()
+    if have is not None and need > have:
+        raise SceneError("t_eval", f"{count} times need about {_size(need)} for their samples, more than the "
+                                   f"{_size(have)} of memory available; ask for fewer times, or for dense_output=True "
+                                   "and read result.sol(t) a part at a time")
+
+
+def _size(n_bytes: float) -> str:
+    for unit in ("bytes", "kB", "MB", "GB"):
+        if n_bytes < 1000:
+            return f"{n_bytes:.3g} {unit}"
+        n_bytes /= 1000
+    return f"{n_bytes:.3g} TB"
 
 
 __all__ = ["ENGINES", "OPTIONS", "model_spec", "simulate"]

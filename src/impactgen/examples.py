@@ -8,7 +8,7 @@ from __future__ import annotations
 from importlib.resources import files
 from pathlib import Path
 
-from .errors import SceneError
+from .errors import SceneError, excerpt
 
 _PACKAGE = "impactgen.scenes"
 
@@ -25,7 +25,7 @@ def example_names() -> list[str]:
 def example_text(name: str) -> str:
     """The TOML text of a shipped example."""
     if name not in example_names():
-        raise SceneError(None, f"no example scene named {name!r}; the examples are "
+        raise SceneError(None, f"no example scene named {excerpt(name)}; the examples are "
                                f"{', '.join(example_names())} (see 'impactgen examples')")
     return _folder().joinpath(f"{name}.toml").read_text(encoding="utf-8")
 

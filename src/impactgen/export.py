@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ImpactgenError, SceneError
+from .errors import ImpactgenError, SceneError, excerpt
 from .results import IMPACT_UNITS, OUTPUT_UNITS, SimulationResult, point_number
 
 FORMATS = ("parquet", "csv")
@@ -44,7 +44,7 @@ def write_run(result: SimulationResult, out: Path, fmt: str | None = None) -> li
     """Write trajectory.<fmt>, impacts.<fmt> and summary.json into folder `out`."""
     fmt = fmt or default_format()
     if fmt not in FORMATS:
-        raise SceneError("--format", f"{fmt!r} is not one of {', '.join(FORMATS)}")
+        raise SceneError("--format", f"{excerpt(fmt)} is not one of {', '.join(FORMATS)}")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

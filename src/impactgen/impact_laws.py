@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ImpactgenError
+from .errors import ImpactgenError, excerpt
 
 LAWS = ("newton", "poisson", "energetic")
 SLIP_TOLERANCE = 1e-12  # |v_t| below this fraction of the tip speed counts as no slip
@@ -130,11 +130,11 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
         reversing: Painleve's paradox).
     """
     if law not in LAWS:
-        raise ImpactgenError(f"unknown impact law {law!r}: use one of {', '.join(LAWS)}")
+        raise ImpactgenError(f"unknown impact law {excerpt(law)}: use one of {', '.join(LAWS)}")
     if not (e >= 0.0 and math.isfinite(e)):
-        raise ImpactgenError(f"the {law} coefficient of restitution must be a number >= 0, got {e!r}")
+        raise ImpactgenError(f"the {law} coefficient of restitution must be a number >= 0, got {excerpt(e)}")
     if mu < 0 or not math.isfinite(mu):
-        raise ImpactgenError(f"the friction coefficient must be >= 0, got {mu!r}")
+        raise ImpactgenError(f"the friction coefficient must be >= 0, got {excerpt(mu)}")
     q, u = np.asarray(q, dtype=float), np.asarray(u, dtype=float)
     M = chain.mass_matrix(q)
     J = chain.tip_jacobian(q)

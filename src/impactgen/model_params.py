@@ -12,7 +12,7 @@ from functools import lru_cache
 
 from .build import CompiledModel
 from .codegen.parameters import PARAMETERS, Parameter
-from .errors import SceneError
+from .errors import SceneError, excerpt
 from .scene import Scene
 
 
@@ -67,7 +67,7 @@ def derive(model: CompiledModel, params) -> None:
     if bad != lib.MODEL_PARAMS_OK:
         key = ffi.string(lib.model_param_key(bad)).decode()
         value = getattr(params, ffi.string(lib.model_param_name(bad)).decode())
-        raise SceneError(key, f"{value!r} is outside its physical range "
+        raise SceneError(key, f"{excerpt(value)} is outside its physical range "
                               f"{ffi.string(range_text[0]).decode()}")
 
 

@@ -17,7 +17,7 @@ from typing import Any, Generic, NamedTuple, TypeVar
 import numpy as np
 
 from .codegen.spec import point_name, point_number
-from .dense import DenseSolution
+from .dense import NO_DENSE_OUTPUT, DenseSolution, NoDenseOutput
 from .scene import Scene, Solver, replace_solver
 from .validity import YieldScale, energy_warning, frozen_friction_warning, validity_warnings
 
@@ -298,8 +298,9 @@ class SimulationResult:
     v_B : ndarray, shape (2, n_points)
     T_links : ndarray, shape (n, n_points)
     phase : ndarray of str, shape (n_points,)
-    sol : DenseSolution or None
-        y(t) anywhere in the run, if `dense_output=True` was asked for.
+    sol : DenseSolution or NoDenseOutput
+        y(t) anywhere in the run, if `dense_output=True` was asked for; otherwise a false
+        value whose call raises a `SceneError` saying how to ask for it.
     status : {"ok", "no-impact", "failed"}
     success : bool
         False only for "failed"; `message` then says why, and the samples reach the failure.
@@ -343,7 +344,7 @@ class SimulationResult:
     impact_records: list[Impact]  # as the engine recorded them: their energies wait for `impacts`
     make_stats: Callable[[], dict[str, Any]]
     sampled: Trajectory | None = None  # the samples at t_eval, if asked for
-    sol: DenseSolution | None = None
+    sol: DenseSolution | NoDenseOutput | None = None  # NO_DENSE_OUTPUT once made
     contact: Mapping[str, YieldScale] | None = None  # each point's contact constants the engine ran with, for `warnings`
     tallied: "TallyRecords | tuple[Tallied, Tallied] | None" = None  # the C engine's summaries (run, first impact)
     solver: Solver | None = None  # the solver settings of the run (None given: the scene's own)
@@ -351,6 +352,8 @@ class SimulationResult:
     def __post_init__(self) -> None:
         if self.solver is None:
             self.solver = self.given_scene.solver
+        if self.sol is None:  # a call then says that dense output was not asked for, and how to ask
+            self.sol = NO_DENSE_OUTPUT
 
     @property
     def scene(self) -> Scene:

@@ -28,7 +28,21 @@ class Case:
     name: str
     group: str
     overrides: dict[str, Any]
-    links: int = 2  # 2: the paper's scene; otherwise a steel chain of that many links
+    links: int = 2  # 2: the example scene `example`; otherwise a steel chain of that many links
+    example: str = "paper"  # the shipped example the overrides change
+    against_reference: bool = False  # record the first delta_max's error against the reference engine
+
+
+REFERENCE_RTOL = 1e-12  # the reference engine's tolerance where it is the yardstick (atol 1e-2 rtol)
+# A 3-link chain released at rest, its tip on the surface: the tip rests in compliant contact,
+# pressed by the chain's weight, for the whole run (one impact that has not ended at 58 ms).
+# The reference engine has no sustained-contact phase, so the C engine runs without it too.
+RESTING = Case("3 links released at rest, tip resting 58 ms", "resting contact",
+               {"initial.q_deg": [-60.0, -60.0, -60.0], "initial.u": [0.0, 0.0, 0.0], "surface.height": "initial",
+                "solver.t_end": 0.058, "solver.sustained_contact": False},
+               example="chain3-free-flight", against_reference=True)
+RESTING_METHODS = ("auto", "bdf", "adams", "erk", "dopri5")  # every method of the C engine
+RESTING_RTOLS = (1e-6, 1e-8, 1e-10, 1e-12)
 
 
 def catalogue(quick: bool = False) -> list[Case]:
@@ -65,6 +79,7 @@ def catalogue(quick: bool = False) -> list[Case]:
              {"solver.t_end": t_end, "contact.friction_mode": "coulomb"}),
         Case(f"{t_end:g} s, no sustained contact", "repeated impacts",
              {"solver.t_end": t_end, "solver.sustained_contact": False}),
+        RESTING,
     ]
     return cases
 
@@ -92,15 +107,30 @@ def scene_for(case: Case, setting: dict[str, Any]) -> Scene:
         if solver.get("jacobian") == "analytic" and case.links > 6:
             solver["jacobian"] = "difference"  # the Jacobian of a long chain costs minutes to build
         return base.replace(solver=dataclasses.replace(base.solver, **solver))
-    return load_scene(Path(str(files("impactgen.scenes") / "paper.toml")), overrides)
+    return load_scene(Path(str(files("impactgen.scenes") / f"{case.example}.toml")), overrides)
 
 
-def run_case(case: Case, setting_name: str) -> dict[str, Any]:
+_REFERENCE_DELTA_MAX: dict[str, float] = {}  # case name -> the reference engine's first delta_max
+
+
+def reference_delta_max(case: Case) -> float:
+    """The first impact's delta_max of `case` from the reference engine (Radau at
+    REFERENCE_RTOL), computed once per case."""
+    if case.name not in _REFERENCE_DELTA_MAX:
+        import impactgen
+        scene = scene_for(case, {})
+        result = impactgen.simulate(scene, engine="reference", rtol=REFERENCE_RTOL, atol=1e-2 * REFERENCE_RTOL)
+        _REFERENCE_DELTA_MAX[case.name] = result.impacts[0].delta_max if result.impacts else math.nan
+    return _REFERENCE_DELTA_MAX[case.name]
+
+
+def run_case(case: Case, setting_name: str, setting: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One run of `case` under the setting of that name (SETTINGS), or under `setting`."""
     import impactgen
     row: dict[str, Any] = {"case": case.name, "group": case.group, "setting": setting_name}
     started = time.perf_counter()
     try:
-        scene = scene_for(case, SETTINGS[setting_name])
+        scene = scene_for(case, SETTINGS[setting_name] if setting is None else setting)
         result = impactgen.simulate(scene)
     except ImpactgenError as exc:
         row.update(status="failed", reason=str(exc), wall_s=time.perf_counter() - started)
@@ -112,7 +142,10 @@ def run_case(case: Case, setting_name: str) -> dict[str, Any]:
     s = result.first_impact  # the checks of one impact; the whole run's budget is checked below
     finite = bool(np.all(np.isfinite(result.y))) and all(
         math.isfinite(v) for v in (s["delta_T"], s["delta_r"], s["delta_max"]))
-    scale = max(abs(s["T0"]), 1e-300)
+    # the budget relative to T0; for a start at rest (T0 = 0: a resting tip) to the largest work
+    works = [abs(v) for k, v in s["energy"].items() if k != "residual"]
+    scale_name = "T0" if s["T0"] > 0 else "the largest work"
+    scale = max(abs(s["T0"]) if s["T0"] > 0 else max(works, default=0.0), 1e-300)
     budget = abs(s["energy"]["residual"]) / scale
     checks = []
     if not finite:
@@ -120,7 +153,7 @@ def run_case(case: Case, setting_name: str) -> dict[str, Any]:
     if result.impacts and not (0.0 <= s["delta_r"] <= s["delta_max"]):
         checks.append("delta_r outside [0, delta_max]")
     if result.impacts and budget > 1e-6:
-        checks.append(f"energy budget off by {budget:.1e} of T0")
+        checks.append(f"energy budget off by {budget:.1e} of {scale_name}")
     run_budget = _whole_run_budget(result)
     if scene.solver.t_end is not None and run_budget > 1e-6:
         checks.append(f"whole-run energy budget off by {run_budget:.1e} of the energy scale")
@@ -134,7 +167,41 @@ def run_case(case: Case, setting_name: str) -> dict[str, Any]:
         sustained=sum(p.phase == "sustained" for p in result.phases),
         stick_slip=sum(len(i.stick_slip) for i in result.impacts),
     )
+    if case.against_reference and result.impacts:
+        reference = reference_delta_max(case)
+        row["reference_error"] = abs(s["delta_max"] - reference) / reference
     return row
+
+
+def resting_contact_rows() -> list[dict[str, Any]]:
+    """The resting tip under every method of the C engine at RESTING_RTOLS (atol 1e-2 rtol),
+    each with its first delta_max's error against the reference engine."""
+    rows = []
+    for method in RESTING_METHODS:
+        for rtol in RESTING_RTOLS:
+            setting = {"solver.method": method, "solver.rtol": rtol, "solver.atol": 1e-2 * rtol,
+                       "solver.max_steps": MAX_STEPS}
+            row = run_case(RESTING, f"{method}, rtol {rtol:.0e}", setting)
+            row["group"] = "resting contact, tolerances"
+            rows.append(row)
+    return rows
+
+
+def resting_contact_table(rows: list[dict[str, Any]]) -> list[str]:
+    """The resting tip's first delta_max against the reference engine, a method per line and
+    a tolerance per column."""
+    errors = {r["setting"]: r.get("reference_error") for r in rows if r["group"] == "resting contact, tolerances"}
+    if not errors:
+        return []
+    lines = ["## Resting contact against the reference engine", "",
+             f"{RESTING.name}: the error of the tip's first delta_max, relative, against the reference "
+             f"engine (Radau at rtol {REFERENCE_RTOL:g}).", "",
+             "| method | " + " | ".join(f"rtol {r:.0e}" for r in RESTING_RTOLS) + " |",
+             "|---|" + "---|" * len(RESTING_RTOLS)]
+    for method in RESTING_METHODS:
+        cells = [errors.get(f"{method}, rtol {r:.0e}") for r in RESTING_RTOLS]
+        lines.append(f"| {method} | " + " | ".join("failed" if e is None else f"{e:.1e}" for e in cells) + " |")
+    return lines
 
 
 def _whole_run_budget(result) -> float:
@@ -155,6 +222,10 @@ def run_catalogue(quick: bool = False) -> list[dict[str, Any]]:
         end = "\r" if sys.stderr.isatty() else "\n"
         print(f"stability [{i + 1}/{total}] {case.name}: {setting}".ljust(90), end=end, file=sys.stderr, flush=True)
         rows.append(run_case(case, setting))
+    if not quick:
+        print("stability: resting contact under every method and tolerance".ljust(90), end=end, file=sys.stderr,
+              flush=True)
+        rows += resting_contact_rows()
     return rows
 
 
@@ -184,13 +255,16 @@ def write_report(rows: list[dict[str, Any]], out: Path, quick: bool) -> Path:
              f"Measured by `impactgen stability{' --quick' if quick else ''}`: {len(rows)} runs, "
              f"{ok} ok or no-impact, {len(rows) - ok} failed or failed a check.", "",
              "A run is ok when it finishes, nothing is non-finite, delta_r lies in [0, delta_max]",
-             "and the energy budget closes to 1e-6 of T0. Failures keep their reason.", "",
+             "and the energy budget closes to 1e-6 of T0 (of the largest work for a start at rest).",
+             "Failures keep their reason.", "",
              "Whole-run budgets (repeated impacts) are relative to T0 + |V0|, the size of the",
              "energies they subtract. 'sustained' counts sustained-contact spans, 'stick-slip' the",
              "switches of exact Coulomb friction.", "",
+             "'vs reference' is the first delta_max's error against the reference engine, where the",
+             "case records it (resting contact).", "",
              "| case | group | setting | status | impacts | sustained | stick-slip | steps | RHS calls | "
-             "Jacobians | ms | budget/T0 | run budget | delta_r (m) | warnings | reason |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "Jacobians | ms | budget/T0 | run budget | delta_r (m) | vs reference | warnings | reason |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(
             f"| {r['case']} | {r['group']} | {r['setting']} | {r['status']} | {r.get('impacts', '')} | "
@@ -198,8 +272,16 @@ def write_report(rows: list[dict[str, Any]], out: Path, quick: bool) -> Path:
             f"{r.get('nsteps', '')} | {r.get('nfev', '')} | {r.get('njev', '')} | {r['wall_s'] * 1e3:.1f} | "
             f"{r.get('budget_error', float('nan')):.1e} | {r.get('run_budget_error', float('nan')):.1e} | "
             f"{r.get('delta_r', float('nan')):.3g} | "
+            f"{_error_cell(r.get('reference_error'))} | "
             f"{r.get('warnings', '')} | {str(r.get('reason', '')).replace('|', '/')[:160]} |")
     lines += ["", *stiff_friction_table(rows)]
+    resting = resting_contact_table(rows)
+    if resting:
+        lines += ["", *resting]
     path = out / "stability.md"
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def _error_cell(error: float | None) -> str:
+    return "" if error is None else f"{error:.1e}"

@@ -27,7 +27,7 @@ from ..codegen.emit import _c_double, _templates, _tidy, driver_files, generate_
 from ..codegen.expressions import assemble_model
 from ..codegen.spec import ModelSpec
 from ..engines import model_spec
-from ..errors import BuildError, SceneError
+from ..errors import BuildError, SceneError, excerpt
 from ..scene import Scene
 from ..sundials import find_sundials
 from .variables import KINDS, UNITS, Variable, variables
@@ -76,7 +76,7 @@ class FmuSources:
 def fmu_sources(scene: Scene, kind: str = "both") -> FmuSources:
     """The sources and descriptions of `scene`'s FMU. `kind`: "me", "cs" or "both"."""
     if kind not in KINDS_OF_FMU:
-        raise SceneError("--kind", f"unknown FMU kind {kind!r}; choose one of {', '.join(KINDS_OF_FMU)}")
+        raise SceneError("--kind", f"unknown FMU kind {excerpt(kind)}; choose one of {', '.join(KINDS_OF_FMU)}")
     me, cs = kind in ("me", "both"), kind in ("cs", "both")
     spec = fmu_spec(scene)
     gen = generate_model(spec)

@@ -66,6 +66,7 @@ typedef struct {
     model_params p;              /* inputs as set; derived and machine fields after initialization */
     double q0[MODEL_NQ], u0[MODEL_NQ];
     double t;
+    double t_done;               /* Model Exchange: the last completed step or event; time never goes before it */
     double y[MODEL_NSTATE];
     model_machine m;
     double start_time, stop_time, rtol;
@@ -131,7 +132,7 @@ static void set_start_values(instance *c)
         c->q0[i] = y0[i];
         c->u0[i] = y0[MODEL_NQ + i];
     }
-    c->t = c->start_time = 0.0;
+    c->t = c->t_done = c->start_time = 0.0;
     c->stop_time = FAR_FUTURE;
     c->rtol = MODEL_SCENE_RTOL;
 }
@@ -259,7 +260,11 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined,
         if (!(tolerance > 0.0 && tolerance < 1.0)) return fail(c, "%s", "the tolerance must lie in (0, 1)");
         c->rtol = tolerance;
     }
-    c->t = c->start_time = startTime;
+    if (!isfinite(startTime)) return fail(c, "%s", "fmi2SetupExperiment: the start time must be a finite number");
+    if (stopTimeDefined && !(isfinite(stopTime) && stopTime >= startTime)) {
+        return fail(c, "%s", "fmi2SetupExperiment: the stop time must be a finite number >= the start time");
+    }
+    c->t = c->t_done = c->start_time = startTime;
     c->stop_time = stopTimeDefined ? stopTime : FAR_FUTURE;
     return fmi2OK;
 }
@@ -631,6 +636,7 @@ fmi2Status fmi2EnterEventMode(fmi2Component comp)
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2EnterEventMode", IN(EVENT) | IN(CONTINUOUS))) return fmi2Error;
     c->mode = EVENT;
+    c->t_done = c->t;
     return fmi2OK;
 }
 
@@ -683,6 +689,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetFMUS
         return fmi2Error;
     }
     model_events(c->t, c->y, ev, &c->p);
+    c->t_done = c->t;
     *enterEventMode = model_machine_crossed(&c->m, ev, fired) > 0;
     if (!*enterEventMode) model_machine_sides(&c->m, ev);
     *terminateSimulation = fmi2False;
@@ -693,6 +700,14 @@ fmi2Status fmi2SetTime(fmi2Component comp, fmi2Real time)
 {
     instance *c = (instance *)comp;
     if (!allowed(c, "fmi2SetTime", IN(EVENT) | IN(CONTINUOUS))) return fmi2Error;
+    /* an integrator may go back within its step (a retried step, a root search), never before
+     * the last completed step or event: this FMU keeps no earlier state to go back to */
+    if (!isfinite(time)) return fail(c, "%s", "fmi2SetTime: the time must be a finite number");
+    if (time < c->t_done) {
+        say(c, fmi2Error, "logStatusError", "fmi2SetTime: t = %.17g s is before the last completed step or event "
+            "at t = %.17g s: time cannot go backwards", time, c->t_done);
+        return fmi2Error;
+    }
     c->t = time;
     return fmi2OK;
 }
@@ -824,8 +839,13 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     instance *c = (instance *)comp;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!allowed(c, "fmi2DoStep", IN(STEPPING))) return fmi2Error;
-    if (!(h >= 0.0) || fabs(t - c->t) > 1e-9 * fmax(1.0, fabs(t))) {
-        return fail(c, "%s", "fmi2DoStep: the step must start where the last one ended, with h >= 0");
+    if (!isfinite(t) || !isfinite(h)) {
+        return fail(c, "%s", "fmi2DoStep: the communication point and the step size must be finite numbers");
+    }
+    if (!(h >= 0.0) || !(fabs(t - c->t) <= 1e-9 * fmax(1.0, fabs(t)))) {
+        say(c, fmi2Error, "logStatusError", "fmi2DoStep: the step must start where the last one ended (t = %.17g s), "
+            "with h >= 0; got t = %.17g s, h = %g s", c->t, t, h);
+        return fmi2Error;
     }
     const double target = t + h;
     const double t_stop = c->stop_time + STOP_SLACK * fmax(1.0, fabs(c->stop_time));

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from ..scene import Scene, load_scene
-from .run import run_sweep
+from .run import check_arguments, run_sweep
 from .spec import SweepSpec
 
 
@@ -31,10 +31,11 @@ def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random
     random : int, default 0
         Draw this many cases from the distributions instead of the grid.
     seed : int, default 0
-        Seed of the random draws.
+        Seed of the random draws: a whole number >= 0.
     workers : int, optional
-        Processes of the local pool (default: all cores; 1 runs in this process), or of the
-        LocalCluster with ``scheduler="local"``.
+        Processes of the local pool (default: every usable core; 1 runs in this process), or
+        of the LocalCluster with ``scheduler="local"``. At most one per case and one per
+        usable core are started (`worker_limit`); more asked for is an `ImpactgenWarning`.
     scheduler : str, optional
         Run on a Dask distributed cluster: its scheduler's address ("tcp://HOST:PORT"), or
         "local" to start a LocalCluster here.
@@ -57,12 +58,15 @@ def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random
     Raises
     ------
     SceneError
-        A bad specification (unknown key, index out of range, malformed range, count 0),
+        A bad specification (unknown key, index out of range, malformed range, count 0) or
+        argument (a negative or fractional seed, workers < 1, a `progress` that cannot be
+        called, an `out` that is not a path, `trajectories` that are not case numbers),
         named, before any case runs.
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     spec = SweepSpec.from_vary(vary, random=random, seed=seed)
+    check_arguments(workers=workers, out=out, progress=progress, scheduler=scheduler)
     return run_sweep(scene, spec, workers=workers, out=Path(out) if out is not None else None,
                      progress=progress, scheduler=scheduler, trajectories=trajectories)
 

@@ -24,7 +24,7 @@ from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from typing import Any, Callable, Collection, Iterator, NamedTuple
 
-from ..errors import SceneError
+from ..errors import SceneError, excerpt
 
 GUIDED_SHARE = 2  # a chunk holds at most 1/(GUIDED_SHARE x workers) of the cases not yet sent
 MAX_CHUNK = 2000  # cases: a lost or interrupted chunk costs at most this much work again (0.2 s of
@@ -227,7 +227,7 @@ def dask_cluster(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
         else:
             client = Client(scheduler, timeout="20s")
     except (OSError, TimeoutError, ValueError) as exc:
-        raise SceneError("--scheduler", f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
+        raise SceneError("--scheduler", f"cannot reach the Dask scheduler at {excerpt(scheduler)}: {exc}") from None
     try:
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         chunks = chunked(todo, n_workers, MAX_TASK_CHUNK)

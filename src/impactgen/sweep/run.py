@@ -14,12 +14,12 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 
 from ..engines import simulate
-from ..errors import ImpactgenError, SceneError
+from ..errors import ImpactgenError, SceneError, excerpt, warn
 from ..export import trajectory_columns, write_parquet, write_table
 from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
@@ -334,19 +334,72 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
     """Run every case of `spec` on `scene` and return the table (a pandas DataFrame).
 
     `scheduler` runs the chunks on a Dask cluster (an address, or "local"); otherwise a local
-    pool of `workers` processes (default: every core) runs them. `trajectories` keeps the
-    samples of that many evenly chosen cases (or of the listed case numbers) in
+    pool of `workers` processes (default: every usable core) runs them. `trajectories` keeps
+    the samples of that many evenly chosen cases (or of the listed case numbers) in
     `out/trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
-    into `out` had finished (they are not run again).
+    into `out` had finished (they are not run again). Every argument is checked before any
+    case runs; workers beyond `worker_limit` are not started, and a warning says so.
     """
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise SceneError("--workers", f"expected a number of worker processes >= 1, got {workers!r}")
+    check_arguments(workers=workers, out=out, progress=progress, scheduler=scheduler, on_resume=on_resume)
+    import pandas  # noqa: F401 - imported before the heap is frozen: its objects are most of it
+    with execute.frozen_heap():
+        return _run(scene, spec, workers, Path(out) if out is not None else None, progress, scheduler,
+                    trajectories, on_resume)
+
+
+def check_arguments(*, workers: Any = None, out: Any = None, progress: Any = None, scheduler: Any = None,
+                    on_resume: Any = None) -> None:
+    """Refuse, in one line naming the argument, anything of the wrong kind, before any case
+    runs (a bad `progress` had failed only after every case had run, losing the work)."""
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer))
+                                or workers < 1):
+        raise SceneError("--workers", f"expected a whole number of worker processes >= 1, got {excerpt(workers)}")
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise SceneError("--scheduler", f'expected an address "tcp://HOST:PORT" or "local", got {excerpt(scheduler)}')
     if scheduler not in (None, "local") and workers is not None:
         raise SceneError("--workers", "a Dask cluster at an address has its own workers: give --workers "
                                       "only with no --scheduler or --scheduler local")
-    import pandas  # noqa: F401 - imported before the heap is frozen: its objects are most of it
-    with execute.frozen_heap():
-        return _run(scene, spec, workers, out, progress, scheduler, trajectories, on_resume)
+    if out is not None and not isinstance(out, (str, os.PathLike)):
+        raise SceneError("--out", f"expected a folder (a str or Path), got {type(out).__name__} {excerpt(out)}")
+    if isinstance(out, str) and not out:
+        raise SceneError("--out", 'expected a folder, got "" (use "." for this folder)')
+    for name, function in (("progress", progress), ("on_resume", on_resume)):
+        if function is not None and not callable(function):
+            raise SceneError(name, f"expected a function called with a number of cases, or None; got "
+                                   f"{type(function).__name__} {excerpt(function)}")
+
+
+WORKERS_PER_CORE = 1  # a case is pure CPU work: processes beyond the cores only take turns on them
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity where the system tells it)."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except AttributeError:  # macOS, Windows
+        return os.cpu_count() or 1
+
+
+def worker_limit(cases: int) -> int:
+    """The most worker processes a sweep of `cases` cases starts: one per case and
+    WORKERS_PER_CORE per usable core, whichever is fewer (at least 1)."""
+    return max(1, min(cases, WORKERS_PER_CORE * usable_cores()))
+
+
+def capped_workers(asked: int | None, cases: int) -> int:
+    """The workers to start for `cases` cases when `asked` were asked for (None: as many as
+    help). More than `worker_limit` are not started, and a warning says how many are."""
+    limit = worker_limit(cases)
+    if asked is None:
+        return limit
+    if asked > limit:
+        cores = usable_cores()
+        why = f"{cases} case{'s' if cases != 1 else ''} to run" if limit == cases else \
+            f"{cores} usable core{'s' if cores != 1 else ''} x {WORKERS_PER_CORE} worker per core"
+        warn(f"--workers {asked}: starting {limit} worker process{'es' if limit != 1 else ''}, the most this "
+             f"sweep can use ({why})")
+        return limit
+    return int(asked)
 
 
 def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, progress: Progress | None,
@@ -425,15 +478,24 @@ def _taken(column: np.ndarray | list[Any], order: np.ndarray) -> np.ndarray | li
 
 
 def _kept_cases(trajectories: int | Iterable[int], total: int) -> frozenset[int]:
+    """The case numbers whose trajectories are kept: `trajectories` evenly chosen ones, or
+    those listed; anything else (a word, a fraction, a case that does not exist) is refused."""
     if isinstance(trajectories, (int, np.integer)) and not isinstance(trajectories, bool):
         if trajectories < 0:
             raise SceneError("--trajectories", f"expected a number of cases >= 0, got {trajectories}")
         return evenly_chosen(int(trajectories), total)
-    chosen = frozenset(int(i) for i in trajectories)
-    bad = sorted(i for i in chosen if not 0 <= i < total)
-    if bad:
-        raise SceneError("--trajectories", f"case {bad[0]} does not exist: the cases are 0 to {total - 1}")
-    return chosen
+    how = "a number of cases to keep, or a list of case numbers such as [0, 5, 9]"
+    if isinstance(trajectories, (str, bytes, Mapping)) or not isinstance(trajectories, Iterable):
+        raise SceneError("--trajectories", f"expected {how}; got {type(trajectories).__name__} "
+                                           f"{excerpt(trajectories)}")
+    chosen = set()
+    for case in trajectories:
+        if isinstance(case, bool) or not isinstance(case, (int, np.integer)):
+            raise SceneError("--trajectories", f"expected {how}; got the item {excerpt(case)}")
+        if not 0 <= case < total:
+            raise SceneError("--trajectories", f"case {int(case)} does not exist: the cases are 0 to {total - 1}")
+        chosen.add(int(case))
+    return frozenset(chosen)
 
 
 def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: int | None,
@@ -442,8 +504,9 @@ def _execute(scene: Scene, todo: execute.Chunk, options: CaseOptions, workers: i
         return iter(())
     payload = scene.to_dict()
     if scheduler is not None:
-        return execute.dask_cluster(run_chunk, payload, options, todo, scheduler, workers)
-    workers = workers or os.cpu_count() or 1
+        local = capped_workers(workers, len(todo)) if scheduler == "local" else None
+        return execute.dask_cluster(run_chunk, payload, options, todo, scheduler, local)
+    workers = capped_workers(workers, len(todo))
     if workers == 1:
         return execute.in_process(run_chunk, payload, options, todo)
     _load_model(scene)  # forked workers inherit it loaded: no start-up cost per worker

@@ -20,7 +20,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, excerpt
 from ..scene import Scene, check_values, parse_override, split_key
 
 GRIDS = ("linspace", "logspace")
@@ -57,7 +57,7 @@ class Axis:
 def parse_axis(text: str) -> Axis:
     """One `KEY=SPEC` of `--vary`."""
     if "=" not in text:
-        raise SceneError("--vary", f"expected KEY=SPEC, got {text!r}")
+        raise SceneError("--vary", f"expected KEY=SPEC, got {excerpt(text)}")
     key, spec = (part.strip() for part in text.split("=", 1))
     split_key(key)  # an unknown key or a bad index ends here, named
     call = CALL.match(spec)
@@ -65,18 +65,18 @@ def parse_axis(text: str) -> Axis:
         _, value = parse_override(f"{key}={spec}")
         if not isinstance(value, list) or not value:
             raise SceneError(key, f"expected a list [a, b, ...], a grid linspace(a,b,n) | logspace(a,b,n) "
-                                  f"or a distribution {' | '.join(d + '(...)' for d in DISTRIBUTIONS)}, got {spec!r}")
+                                  f"or a distribution {' | '.join(d + '(...)' for d in DISTRIBUTIONS)}, got {excerpt(spec)}")
         return Axis(key, tuple(value))
     name, args = call["name"], call["args"]
     try:
         numbers = [float(a) for a in args.split(",")]
     except ValueError:
-        raise SceneError(key, f"{name}(...) takes numbers, got {args!r}") from None
+        raise SceneError(key, f"{name}(...) takes numbers, got {excerpt(args)}") from None
     if not all(np.isfinite(numbers)):
-        raise SceneError(key, f"{name}(...) takes finite numbers, got {args!r}")
+        raise SceneError(key, f"{name}(...) takes finite numbers, got {excerpt(args)}")
     if name in GRIDS:
         if len(numbers) != 3 or not float(numbers[2]).is_integer():
-            raise SceneError(key, f"{name}(a,b,n) takes two numbers and a whole count, got {spec!r}")
+            raise SceneError(key, f"{name}(a,b,n) takes two numbers and a whole count, got {excerpt(spec)}")
         count = int(numbers[2])
         if count < 1:
             raise SceneError(key, f"{name}(a,b,n) needs a count n of at least 1, got {count}")
@@ -87,13 +87,13 @@ def parse_axis(text: str) -> Axis:
         return Axis(key, tuple(grid(numbers[0], numbers[1], count).tolist()))
     if name in DISTRIBUTIONS:
         if len(numbers) != 2:
-            raise SceneError(key, f"{name}(a,b) takes two numbers, got {spec!r}")
+            raise SceneError(key, f"{name}(a,b) takes two numbers, got {excerpt(spec)}")
         if name == "uniform" and not numbers[0] < numbers[1]:
-            raise SceneError(key, f"uniform(a,b) needs a < b, got {spec!r}")
+            raise SceneError(key, f"uniform(a,b) needs a < b, got {excerpt(spec)}")
         if name != "uniform" and numbers[1] < 0:
-            raise SceneError(key, f"{name}(mu,sigma) needs sigma >= 0, got {spec!r}")
+            raise SceneError(key, f"{name}(mu,sigma) needs sigma >= 0, got {excerpt(spec)}")
         return Axis(key, distribution=name, parameters=tuple(numbers))
-    raise SceneError(key, f"unknown range {name!r}: use linspace, logspace, "
+    raise SceneError(key, f"unknown range {excerpt(name)}: use linspace, logspace, "
                           f"{', '.join(DISTRIBUTIONS)} or a list [a, b, ...]")
 
 
@@ -105,11 +105,11 @@ def _vary_items(vary: Any) -> list[tuple[str | None, Any]]:
     if isinstance(vary, Mapping):
         bad = next((k for k in vary if not isinstance(k, str)), None)
         if bad is not None:
-            raise SceneError("vary", f"a key must be a scene key as a string, got {bad!r}; {how}")
+            raise SceneError("vary", f"a key must be a scene key as a string, got {excerpt(bad)}; {how}")
         return list(vary.items())
     if isinstance(vary, (list, tuple)) and all(isinstance(v, str) for v in vary):
         return [(None, v) for v in vary]
-    raise SceneError("vary", f"{how}, got {vary!r:.80}")
+    raise SceneError("vary", f"{how}, got {excerpt(vary)}")
 
 
 @dataclass(frozen=True)
@@ -143,8 +143,11 @@ class SweepSpec:
         keys = [a.key for a in axes]
         if len(set(keys)) != len(keys):
             raise SceneError(next(k for k in keys if keys.count(k) > 1), "is varied twice")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise SceneError("--seed", f"expected a whole number >= 0 (numpy's generators take no other), "
+                                       f"got {excerpt(seed)}")
         if isinstance(random, bool) or not isinstance(random, (int, np.integer)) or random < 0:
-            raise SceneError("--random", f"expected a number of cases >= 1, got {random!r}")
+            raise SceneError("--random", f"expected a number of cases >= 1, got {excerpt(random)}")
         if not random and any(a.distribution for a in axes):
             key = next(a.key for a in axes if a.distribution)
             raise SceneError(key, "a distribution needs --random N (how many cases to draw)")
