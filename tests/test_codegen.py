@@ -72,7 +72,10 @@ def test_pruned_scene_generates_no_friction_and_no_plastic_code():
 
 @needs_cc
 @pytest.mark.parametrize("spec", [ModelSpec(1, "hertz", "none"), ModelSpec(2), ModelSpec(6),
-                                  ModelSpec(3, "three-phase", "none"), ModelSpec(2, "hertz", "regularized")],
+                                  ModelSpec(3, "three-phase", "none"), ModelSpec(2, "hertz", "regularized"),
+                                  ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
+                                  ModelSpec(3, "hertz", "none", True, joints=(2,)),
+                                  ModelSpec(3, "three-phase", "coulomb", True, True, (1, 2))],
                          ids=lambda s: s.slug)
 def test_model_c_compiles_standalone_without_warnings(tmp_path, spec):
     gen = generate_model(spec)
@@ -199,3 +202,54 @@ def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
         delta = w * contact.delta_c
         c_force, exact = model.lib.model_normal_force(delta, params), contact.jackson_green(delta)
         assert c_force == pytest.approx(exact, rel=2e-14, abs=0.0), w
+
+
+@pytest.mark.parametrize("spec", [ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
+                                  ModelSpec(3, "hertz", "none", True, joints=(2,))], ids=lambda s: s.slug)
+def test_analytic_jacobian_covers_every_contact_point(spec):
+    """Every contact point's force enters the equations as J^T (F_f, F), and the analytic
+    Jacobian follows each of them: the joints and the tip all in contact at once, against
+    central differences of the right-hand side."""
+    from impactgen.build import compile_model
+    model = compile_model(spec)
+    ffi, lib = model.ffi, model.lib
+    rng = np.random.default_rng(7)
+    n, N = spec.links, model.nstate
+    p = ffi.new("model_params *")
+    law = {"E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0, "C_j": 1.6, "B": 0.175,
+           "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084, "mu": 0.2, "eps": 1e-3}
+    law.update(inv_delta_c=1 / law["delta_c"],
+               theta_c=np.pi * np.sqrt(law["delta_c"] / law["R"]) * 1.9 ** (-law["B"] / 2))
+    values = {**{f"L{i + 1}": rng.uniform(0.5, 1.5) for i in range(n)},
+              **{f"m{i + 1}": rng.uniform(0.5, 2.0) for i in range(n)}, "g": 9.81, **law}
+    for name in model.param_names:
+        if name in values:
+            setattr(p, name, values[name])
+    restitution = lib.MODEL_PHASE_RESTITUTION
+    for phase in (1, restitution):
+        y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
+        heights = np.cumsum([values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n)])
+        p.phase, p.y_s = phase, heights[-1] + 1.2e-5  # the tip inside its contact
+        for k, joint in enumerate(spec.joints):  # and each joint inside its own
+            c = p.joint[k]
+            c.phase, c.y_s = phase, heights[joint - 1] + 1.1e-5
+            for name in ("R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res"):
+                if hasattr(c, name):
+                    setattr(c, name, law[name])
+        J = ffi.new("double[]", N * N)
+        assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
+        J = np.array(list(J)).reshape(N, N)
+        fd = np.zeros((N, N))
+        for j in range(2 * n):
+            h = 1e-9 if j < n else 1e-8
+            out = []
+            for sign in (1, -1):
+                yy = y.copy()
+                yy[j] += sign * h
+                f = ffi.new("double[]", N)
+                assert lib.model_rhs(0.0, ffi.new("double[]", list(yy)), f, p) == 0
+                out.append(np.array(list(f)))
+            fd[:, j] = (out[0] - out[1]) / (2 * h)
+        scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
+        assert np.abs(fd[n:2 * n]).max() > 1e3  # the contact forces dominate the accelerations
+        assert np.all(np.abs(J - fd)[:, :2 * n] <= 1e-5 * scale + 1e-9), phase
