@@ -161,7 +161,7 @@ static double normal_force_slope(double delta, const model_params *p)
 #define TIP_POINT 0
 
 /* The parameters as point k sees them: the tip's are p; a joint's, written to *buf. */
-static const model_params *point_params(const model_params *p, int k, model_params *buf)
+static inline const model_params *point_params(const model_params *p, int k, model_params *buf)
 {
     (void)k;
     (void)buf;
@@ -169,7 +169,7 @@ static const model_params *point_params(const model_params *p, int k, model_para
 }
 
 /* The force law point k is under. */
-static int point_phase(const model_params *p, int k)
+static inline int point_phase(const model_params *p, int k)
 {
     (void)k;
     return p->phase;
@@ -181,8 +181,8 @@ typedef struct {
     double Jx[3], Jy[3], Jdot_u[2];
 } point_motion;
 
-static void motion_of_point(int k, const double *y, const double *trig, const model_params *p,
-                            point_motion *m)
+static inline void motion_of_point(int k, const double *y, const double *trig, const model_params *p,
+                                   point_motion *m)
 {
     switch (k) {
     case 0: {  /* the tip */
@@ -235,7 +235,7 @@ typedef struct {
 } point_forces;
 #define NO_FORCES ((point_forces){0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0})
 
-static void forces_at(const point_motion *m, const model_params *p, point_forces *c)
+static inline void forces_at(const point_motion *m, const model_params *p, point_forces *c)
 {
     c->delta = p->y_s - m->y;
     c->delta_rate = -m->v_y;
@@ -275,7 +275,7 @@ typedef struct {
 } contact_forces;
 
 /* Kane's equations without contact: M (lower triangle) and f. */
-static void kane_of(const double *y, const double *trig, const model_params *p, double *M, double *f)
+static inline void kane_of(const double *y, const double *trig, const model_params *p, double *M, double *f)
 {
     const double u1 = y[3];
     const double u2 = y[4];
