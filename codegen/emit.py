@@ -158,7 +158,7 @@ class Kernel:
     """One C function body: what it unpacks (states, parameters, sin/cos) and its blocks."""
 
     q: tuple[tuple[int, str], ...]  # (index into y, name)
-    params: tuple[str, ...]
+    params: tuple[tuple[str, str], ...]  # (name, where: "p" the struct, "pc" the point's record)
     trig: tuple[tuple[str, str, str, int], ...]  # (name, "sin"|"cos", angle, its slot in trig[])
     blocks: tuple[CBlock, ...]
     trig_only: frozenset[str] = frozenset()  # angles read only through their sin and cos
@@ -175,7 +175,8 @@ def _kernel(model: ModelExpressions, blocks: list[CBlock], extra: tuple = ()) ->
     reads |= trig_only
     states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
     used_states = tuple((i, name) for i, name in states if name in reads)
-    params = tuple(f.name for f in model.params if f.name in reads)
+    params = tuple((f.name, "p") for f in model.params if f.name in reads) + tuple(
+        (f.name, "pc") for f in model.point_params if f.name in reads)
     return Kernel(used_states, params, tuple(trig), tuple(blocks), trig_only)
 
 
@@ -190,6 +191,7 @@ class EmitContext:
     nstate: int
     state_names: tuple[str, ...]
     params: tuple[Field, ...]  # the parameter struct, in order
+    point_params: tuple[Field, ...]  # each contact point's record, point[k]
     phases: list[tuple[str, int]]  # (PHASE name, params.phase code) of each force law
     events: list[dict]  # name (upper case), doc, C expression
     outputs: list[tuple[str, str]]  # (name, doc)
@@ -263,7 +265,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         points.append(entry)
 
     # Events: each point's, in its own quantities (pt, from point_at) and its view of the parameters (at)
-    names = {f.name for f in model.params}
+    point_names = {f.name for f in model.point_params}
+    names = {f.name for f in model.params} | point_names
     own = {TIP["delta"]: sm.Symbol("pt.delta"), TIP["delta_rate"]: sm.Symbol("pt.delta_rate"),
            TIP["v_Bx"]: sm.Symbol("pt.v_x"), chain.symbols.F: sm.Symbol("pt.F"),
            chain.symbols.F_f: sm.Symbol("pt.F_f")}
@@ -271,7 +274,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     point_events = []
     for e in model.events:
         expr = sm.sympify(e.expr)
-        view = {x: sm.Symbol(f"at->{x}") for x in expr.free_symbols if str(x) in names}
+        view = {x: sm.Symbol(f"{'pc' if str(x) in point_names else 'p'}->{x}") for x in expr.free_symbols
+                if str(x) in names}
         point_events.append({"name": e.name.upper(), "expr": ccode(expr.xreplace({**own, **view}))})
     event_forces = bool(_reads([e.expr for e in model.events]) & {"F", "F_f"})
 
@@ -306,7 +310,7 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
     return EmitContext(
         prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
-        params=model.params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
+        params=model.params, point_params=model.point_params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
         outputs=[(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else []),
         kane=_kernel(model, [kane]), friction=friction, constrained=spec.constrained,
         event_forces=event_forces, point_events=point_events, points=points,
@@ -322,24 +326,18 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     )
 
 
-# What a joint's contact adds to the model, per joint, in this order: its outputs (the tip's
-# are named x_B, delta, F, ...), and the fields of its contact state in the parameters: the
-# machine's (phase aside) and the constants its own radius gives (`<prefix>_derive`).
+# What a joint's contact adds to the model, per joint: its outputs (the tip's are named x_B,
+# delta, F, ...).
 POINT_OUTPUTS = (("delta", "penetration, m"), ("delta_rate", "d(delta)/dt, m/s"), ("v_x", "velocity x, m/s"),
                  ("v_y", "velocity y, m/s"), ("F", "normal contact force, N"), ("F_f", "friction force along x, N"))
-POINT_FIELDS = ("y_s", "R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res", "slip",
-                "s_frozen")
 
 
 def _joints(model: ModelExpressions) -> dict:
     """The joints that can touch the surface, as the headers and the machine name them: their
     numbers, their contact fields and constants in the parameters, and their outputs."""
     spec = model.spec
-    names = {f.name for f in model.params}
-    fields = [f for f in POINT_FIELDS if f in names]
     return {"joints": [jm.number for jm in model.joints],
             "motion": [{"k": k, "joint": jm.number} for k, jm in enumerate(model.joints)],
-            "fields": fields, "constants": [f for f in ("R", "delta_c", "P_c", "inv_delta_c", "theta_c") if f in names],
             "outputs": [(f"{o}_J{j}", f"joint {j}: {doc}") for j in spec.joints for o, doc in POINT_OUTPUTS],
             "point_fields": [o for o, _ in POINT_OUTPUTS],
             "output_names": {f"{o}_J{j}" for j in spec.joints for o, _ in POINT_OUTPUTS}}

@@ -15,7 +15,7 @@ import sympy as sm
 
 from . import contact as law
 from .mechanics import ChainEquations, chain_equations
-from .parameters import Field, fields
+from .parameters import Field, fields, point_fields
 from .spec import PHASES, ModelSpec
 
 y_s = sm.Symbol("y_s")  # surface height
@@ -117,6 +117,7 @@ class ModelExpressions:
     impulses: tuple[Named, ...] = ()
     heights: tuple[Named, ...] = ()  # joints 1..n-1, then the tip: height above the surface (floor net)
     points: tuple[PointMotion, ...] = ()  # the contact points: the joints that can touch the surface, then the tip
+    point_params: tuple[Field, ...] = ()  # the fields of each point's record, point[k]
 
     @property
     def joints(self) -> tuple[PointMotion, ...]:
@@ -225,12 +226,13 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
         used |= sm.sympify(e).free_symbols
     params = fields(spec.links, spec.friction_law, {str(x) for x in used}, spec.joints)
+    point_params = point_fields(spec.friction_law, {str(x) for x in used})
 
     forcing = chain.forcing.subs({s.F: 0, s.F_f: 0})  # gravity and the motion; contact enters per point
     jacobian = _jacobian(chain, forcing, tuple(cases), friction_force) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign, tuple(events),
                             tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain),
-                            tuple(_point_motion(chain, k) for k in (*spec.joints, spec.links)))
+                            tuple(_point_motion(chain, k) for k in (*spec.joints, spec.links)), point_params)
 
 
 def _heights(chain: ChainEquations) -> tuple[Named, ...]:

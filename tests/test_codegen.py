@@ -100,9 +100,10 @@ def test_model_embeds_in_a_plain_c_program(tmp_path):
         #include "model.h"
         int main(void) {
             model_params p = {0};
-            p.L1 = 1.0; p.L2 = 1.0; p.m1 = 1.0; p.m2 = 1.0; p.g = 9.81; p.y_s = -1.7735;
-            p.E_star = 1.15e11; p.R = 0.005; p.mu = 0.2; p.eps = 1e-6;
-            p.phase = MODEL_PHASE_ELASTIC;
+            model_point_contact *tip = &p.point[MODEL_TIP_POINT];
+            p.L1 = 1.0; p.L2 = 1.0; p.m1 = 1.0; p.m2 = 1.0; p.g = 9.81; tip->y_s = -1.7735;
+            p.E_star = 1.15e11; tip->R = 0.005; p.mu = 0.2; p.eps = 1e-6;
+            tip->phase = MODEL_PHASE_ELASTIC;
             const double y[MODEL_NSTATE] = {-1.2, -1.0, -0.1, -0.2, 0.0, 0.0, 0.0, 0.0};
             double ydot[MODEL_NSTATE];
             if (model_rhs(0.0, y, ydot, &p) != 0) return 1;
@@ -118,10 +119,10 @@ def test_model_embeds_in_a_plain_c_program(tmp_path):
 
     model = compile_model(ModelSpec(2))
     p = model.ffi.new("model_params *")
-    for k, v in dict(L1=1.0, L2=1.0, m1=1.0, m2=1.0, g=9.81, y_s=-1.7735, E_star=1.15e11, R=0.005,
-                     mu=0.2, eps=1e-6).items():
+    for k, v in dict(L1=1.0, L2=1.0, m1=1.0, m2=1.0, g=9.81, E_star=1.15e11, mu=0.2, eps=1e-6).items():
         setattr(p, k, v)
-    p.phase = model.lib.MODEL_PHASE_ELASTIC
+    tip = p.point[model.lib.MODEL_TIP_POINT]
+    tip.y_s, tip.R, tip.phase = -1.7735, 0.005, model.lib.MODEL_PHASE_ELASTIC
     y = model.ffi.new("double[]", [-1.2, -1.0, -0.1, -0.2, 0.0, 0.0, 0.0, 0.0])  # q, u, works, impulses
     ydot = model.ffi.new("double[]", 8)
     assert model.lib.model_rhs(0.0, y, ydot, p) == 0
@@ -158,15 +159,19 @@ def test_analytic_jacobian_matches_central_differences(spec):
               "mu": 0.2, "eps": 1e-3}
     values.update(inv_delta_c=1 / values["delta_c"],  # as model_derive makes them
                   theta_c=np.pi * np.sqrt(values["delta_c"] / values["R"]) * 1.9 ** (-values["B"] / 2))
+    tip = p.point[lib.MODEL_TIP_POINT]
     for name in model.param_names:
         if name in values:  # the constants the laws read (not the materials they come from)
             setattr(p, name, values[name])
+    for name, _ in ffi.typeof("model_point_contact").fields:  # and the tip's own
+        if name in values:
+            setattr(tip, name, values[name])
     for phase in model.phases:
-        p.phase = model.phases.index(phase) if phase != "restitution" else lib.MODEL_PHASE_RESTITUTION
+        tip.phase = model.phases.index(phase) if phase != "restitution" else lib.MODEL_PHASE_RESTITUTION
         for _ in range(3):
             y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
             y_B = sum(values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n))
-            p.y_s = y_B + 1.2e-5  # inside the contact, clear of every law's kinks
+            tip.y_s = y_B + 1.2e-5  # inside the contact, clear of every law's kinks
             J = ffi.new("double[]", N * N)
             assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
             J = np.array(list(J)).reshape(N, N)
@@ -226,16 +231,14 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
         if name in values:
             setattr(p, name, values[name])
     restitution = lib.MODEL_PHASE_RESTITUTION
+    own = [name for name, _ in ffi.typeof("model_point_contact").fields if name in law]
     for phase in (1, restitution):
         y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
         heights = np.cumsum([values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n)])
-        p.phase, p.y_s = phase, heights[-1] + 1.2e-5  # the tip inside its contact
-        for k, joint in enumerate(spec.joints):  # and each joint inside its own
-            c = p.joint[k]
-            c.phase, c.y_s = phase, heights[joint - 1] + 1.1e-5
-            for name in ("R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res"):
-                if hasattr(c, name):
-                    setattr(c, name, law[name])
+        for point, number in zip(p.point, (*spec.joints, n)):  # every point inside its own contact
+            point.phase, point.y_s = phase, heights[number - 1] + 1.1e-5
+            for name in own:
+                setattr(point, name, law[name])
         J = ffi.new("double[]", N * N)
         assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
         J = np.array(list(J)).reshape(N, N)

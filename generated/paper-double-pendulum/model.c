@@ -10,7 +10,6 @@
 #include <string.h>
 
 #include "model.h"
-#define MODEL_NTIP_EVENT MODEL_NEVENT
 
 /* Root-free Cholesky factorization M = L D L^T of a symmetric positive definite M, in place:
  * the unit lower triangle L below the diagonal of M, and dinv[j] = 1 / D_j. No square roots
@@ -51,13 +50,15 @@ static inline void ldl_solve(const double *L, const double *dinv, double *b)
     }
 }
 
-/* The active normal-force law; inline so that the right-hand side pays no call for it. */
-static inline double normal_force(double delta, const model_params *p)
+/* The normal force of a point whose record is pc, under its active law; inline so that the
+ * right-hand side pays no call for it. */
+static inline double normal_force(double delta, const model_point_contact *pc, const model_params *p)
 {
-    switch (p->phase) {
+    (void)p;
+    switch (pc->phase) {
     case MODEL_PHASE_ELASTIC: {  /* Hertz elastic compression (Eq. 9) */
         const double E_star = p->E_star;
-        const double R = p->R;
+        const double R = pc->R;
 
         if (!(delta > 0)) return 0.0;
         const double F = (4.0/3.0)*E_star*sqrt(R)*(delta*sqrt(delta));
@@ -66,10 +67,10 @@ static inline double normal_force(double delta, const model_params *p)
     }
     case MODEL_PHASE_ELASTOPLASTIC: {  /* Jackson-Green elasto-plastic compression (Eq. 10) */
         const double C_j = p->C_j;
-        const double P_c = p->P_c;
         const double B = p->B;
-        const double inv_delta_c = p->inv_delta_c;
-        const double theta_c = p->theta_c;
+        const double P_c = pc->P_c;
+        const double inv_delta_c = pc->inv_delta_c;
+        const double theta_c = pc->theta_c;
 
         if (!(delta > 0)) return 0.0;
         const double w = delta*inv_delta_c;
@@ -91,8 +92,8 @@ static inline double normal_force(double delta, const model_params *p)
     }
     case MODEL_PHASE_RESTITUTION: {  /* elastic restitution about the permanent deformation (Eq. 11) */
         const double E_star = p->E_star;
-        const double delta_r = p->delta_r;
-        const double R_res = p->R_res;
+        const double delta_r = pc->delta_r;
+        const double R_res = pc->R_res;
 
         if (!(delta > delta_r)) return 0.0;
         const double F = (4.0/3.0)*E_star*sqrt(R_res)*((delta - delta_r)*sqrt(delta - delta_r));
@@ -104,18 +105,19 @@ static inline double normal_force(double delta, const model_params *p)
     }
 }
 
-double model_normal_force(double delta, const model_params *p)
+double model_normal_force(int k, double delta, const model_params *p)
 {
-    return normal_force(delta, p);
+    return k >= 0 && k < MODEL_NCONTACT ? normal_force(delta, &p->point[k], p) : 0.0;
 }
 
-/* dF/d(delta) of the active normal-force law, for the Jacobian. */
-static double normal_force_slope(double delta, const model_params *p)
+/* dF/d(delta) of the active normal-force law of a point, for the Jacobian. */
+static double normal_force_slope(double delta, const model_point_contact *pc, const model_params *p)
 {
-    switch (p->phase) {
+    (void)p;
+    switch (pc->phase) {
     case MODEL_PHASE_ELASTIC: {
         const double E_star = p->E_star;
-        const double R = p->R;
+        const double R = pc->R;
 
         if (!(delta > 0)) return 0.0;
         const double dF = 2*E_star*sqrt(R)*sqrt(delta);
@@ -124,10 +126,10 @@ static double normal_force_slope(double delta, const model_params *p)
     }
     case MODEL_PHASE_ELASTOPLASTIC: {
         const double C_j = p->C_j;
-        const double P_c = p->P_c;
         const double B = p->B;
-        const double inv_delta_c = p->inv_delta_c;
-        const double theta_c = p->theta_c;
+        const double P_c = pc->P_c;
+        const double inv_delta_c = pc->inv_delta_c;
+        const double theta_c = pc->theta_c;
 
         if (!(delta > 0)) return 0.0;
         const double s0 = exp(-0.17*pow(delta, 5.0/12.0)*pow(inv_delta_c, 5.0/12.0));
@@ -143,8 +145,8 @@ static double normal_force_slope(double delta, const model_params *p)
     }
     case MODEL_PHASE_RESTITUTION: {
         const double E_star = p->E_star;
-        const double delta_r = p->delta_r;
-        const double R_res = p->R_res;
+        const double delta_r = pc->delta_r;
+        const double R_res = pc->R_res;
 
         if (!(delta > delta_r)) return 0.0;
         const double dF = 2*E_star*sqrt(R_res)*sqrt(delta - delta_r);
@@ -160,19 +162,10 @@ static double normal_force_slope(double delta, const model_params *p)
 #define NCONTACT 1
 #define TIP_POINT 0
 
-/* The parameters as point k sees them: the tip's are p; a joint's, written to *buf. */
-static inline const model_params *point_params(const model_params *p, int k, model_params *buf)
-{
-    (void)k;
-    (void)buf;
-    return p;
-}
-
 /* The force law point k is under. */
 static inline int point_phase(const model_params *p, int k)
 {
-    (void)k;
-    return p->phase;
+    return p->point[k].phase;
 }
 
 /* A point's motion: its height and velocity, and the rows of v = J u with (dJ/dt) u. */
@@ -220,21 +213,23 @@ static inline void motion_of_point(int k, const double *y, const double *trig, c
     (void)y; (void)trig; (void)p;
 }
 
-/* A point's contact quantities, and the forces on it under its own law (`p`, its view). */
+/* A point's contact quantities, and the forces on it under its own law (its record pc). */
 typedef struct {
     double delta, delta_rate, v_x, v_y, F, F_f, s;
 } point_forces;
 #define NO_FORCES ((point_forces){0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0})
 
-static inline void forces_at(const point_motion *m, const model_params *p, point_forces *c)
+static inline void forces_at(const point_motion *m, const model_point_contact *pc, const model_params *p,
+                             point_forces *c)
 {
-    c->delta = p->y_s - m->y;
+    c->delta = pc->y_s - m->y;
     c->delta_rate = -m->v_y;
     c->v_x = m->v_x;
     c->v_y = m->v_y;
-    c->F = normal_force(c->delta, p);
+    c->F = normal_force(c->delta, pc, p);
     const double F = c->F, v_x = m->v_x;
     (void)v_x;
+    (void)pc;
     const double mu = p->mu;
     const double eps = p->eps;
 
@@ -303,9 +298,8 @@ static int accelerations(const double *y, const double *trig, const model_params
     for (int k = 0; k < NCONTACT; ++k) {
         c->point[k] = NO_FORCES;
         if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
-        model_params buf;
         motion_of_point(k, y, trig, p, &kin[k]);
-        forces_at(&kin[k], point_params(p, k, &buf), &c->point[k]);
+        forces_at(&kin[k], &p->point[k], p, &c->point[k]);
         const point_forces *pf = &c->point[k];
         for (int i = 0; i < 2; ++i) f[i] += kin[k].Jx[i] * pf->F_f + kin[k].Jy[i] * pf->F;
     }
@@ -326,9 +320,8 @@ static void point_at(int k, const double *y, const double *trig, const model_par
         return;
     }
     point_motion m;
-    model_params buf;
     motion_of_point(k, y, trig, p, &m);
-    forces_at(&m, point_params(p, k, &buf), pt);
+    forces_at(&m, &p->point[k], p, pt);
 }
 
 /* The right-hand side, given the sines and cosines of y's angles (trig_of). */
@@ -365,22 +358,23 @@ void model_events(double t, const double *y, double *ev, const model_params *p)
     trig_of(y, trig);
     for (int k = 0; k < NCONTACT; ++k) {  /* each point's events, in its own quantities: the tip's first */
         point_forces pt;
-        model_params buf;
         point_at(k, y, trig, p, NULL, &pt);
-        const model_params *at = point_params(p, k, &buf);
+        const model_point_contact *pc = &p->point[k];
         double *e = ev + MODEL_NTIP_EVENT * (k == TIP_POINT ? 0 : k + 1);
-        (void)at;
+        (void)pc;
         e[MODEL_EVENT_CONTACT] = pt.delta;
         e[MODEL_EVENT_MAX_COMPRESSION] = pt.delta_rate;
-        e[MODEL_EVENT_YIELD] = -19.0/10.0*at->delta_c + pt.delta;
-        e[MODEL_EVENT_SEPARATION] = -at->delta_r + pt.delta;
-        e[MODEL_EVENT_PASSES_DELTA_M] = -at->delta_m + pt.delta;
+        e[MODEL_EVENT_YIELD] = -19.0/10.0*pc->delta_c + pt.delta;
+        e[MODEL_EVENT_SEPARATION] = -pc->delta_r + pt.delta;
+        e[MODEL_EVENT_PASSES_DELTA_M] = -pc->delta_m + pt.delta;
     }
 }
 
 void model_outputs(double t, const double *y, double *out, const model_params *p)
 {
     (void)t;
+    const model_point_contact *pc = &p->point[TIP_POINT];  /* the tip's kinematics first */
+    (void)pc;
     double trig[4];
     trig_of(y, trig);
     const double u1 = y[2];
@@ -390,7 +384,7 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     const double m1 = p->m1;
     const double m2 = p->m2;
     const double g = p->g;
-    const double y_s = p->y_s;
+    const double y_s = pc->y_s;
     const double sin_q1 = trig[0];
     const double cos_q1 = trig[1];
     const double sin_q2 = trig[2];
@@ -480,8 +474,9 @@ static void curvature_of_point(int k, const double *y, const double *trig, const
     (void)y; (void)trig; (void)p;
 }
 
-/* dF_f/dF and dF_f/dv_x of a point's friction law, at its forces c, under its view p. */
-static void friction_slopes(const point_forces *c, const model_params *p, double *dFf_dF_out, double *dFf_dv_out)
+/* dF_f/dF and dF_f/dv_x of a point's friction law, at its forces c (its record pc). */
+static void friction_slopes(const point_forces *c, const model_point_contact *pc, const model_params *p,
+                            double *dFf_dF_out, double *dFf_dv_out)
 {
     const double F = c->F, v_x = c->v_x;
     (void)F; (void)v_x;
@@ -494,6 +489,8 @@ static void friction_slopes(const point_forces *c, const model_params *p, double
     const double dFf_dF = -fs2*v_x;
     const double dFf_dv = F*fs0*mu/(fs1*sqrt(fs1)) - F*fs2;
 
+    (void)pc;
+    (void)p;
     *dFf_dF_out = dFf_dF;
     *dFf_dv_out = dFf_dv;
 }
@@ -524,9 +521,8 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     for (int k = 0; k < NCONTACT; ++k) {
         pf[k] = NO_FORCES;
         if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
-        model_params buf;
         motion_of_point(k, y, trig, p, &kin[k]);
-        forces_at(&kin[k], point_params(p, k, &buf), &pf[k]);
+        forces_at(&kin[k], &p->point[k], p, &pf[k]);
         for (int i = 0; i < 2; ++i) f[i] += kin[k].Jx[i] * pf[k].F_f + kin[k].Jy[i] * pf[k].F;
     }
     double dinv[2];
@@ -574,15 +570,14 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) J[k] = 0.0;
     for (int k = 0; k < NCONTACT; ++k) {
         if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
-        model_params buf;
-        const model_params *at = point_params(p, k, &buf);
+        const model_point_contact *pc = &p->point[k];
         const point_motion *m = &kin[k];
         const point_forces *c = &pf[k];
         point_curvature cv;
         curvature_of_point(k, y, trig, p, &cv);
-        const double dF = normal_force_slope(c->delta, at);
+        const double dF = normal_force_slope(c->delta, pc, p);
         double dFf_dF, dFf_dv;
-        friction_slopes(c, at, &dFf_dF, &dFf_dv);
+        friction_slopes(c, pc, p, &dFf_dF, &dFf_dv);
         /* d/dy of the point's forces and velocity, y = (q, u) */
         double dFy[4], dvy[4];
         double dFx[4], dvx[4];
@@ -630,11 +625,13 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
 
 void model_heights(const double *y, double *h, const model_params *p)
 {
+    const model_point_contact *pc = &p->point[TIP_POINT];  /* heights above the tip's surface level */
+    (void)pc;
     const double q1 = y[0];
     const double q2 = y[1];
     const double L1 = p->L1;
     const double L2 = p->L2;
-    const double y_s = p->y_s;
+    const double y_s = pc->y_s;
     const double sin_q1 = sin(q1);
     const double sin_q2 = sin(q2);
 
@@ -651,7 +648,7 @@ void model_tip_works(const double *y, double *W_normal, double *W_friction)
 }
 
 /* d2(delta)/dt2 of point k at y, given ydot = dy/dt: -(Jy du/dt + (dJy/dt) u). */
-static double point_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p)
+double model_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p)
 {
     double trig[4];
     point_motion m;
@@ -660,9 +657,4 @@ static double point_delta_acceleration(int k, const double *y, const double *ydo
     double a = -m.Jdot_u[1];
     for (int i = 0; i < 2; ++i) a -= m.Jy[i] * ydot[2 + i];
     return a;
-}
-
-double model_delta_acceleration(const double *y, const double *ydot, const model_params *p)
-{
-    return point_delta_acceleration(TIP_POINT, y, ydot, p);
 }
