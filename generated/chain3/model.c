@@ -582,8 +582,9 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     kane_of(y, trig, p, M, f);
     point_motion kin[NCONTACT];
     point_forces pf[NCONTACT];
+    memset(kin, 0, sizeof kin);  /* (read only for the points in contact) */
+    memset(pf, 0, sizeof pf);
     for (int k = 0; k < NCONTACT; ++k) {
-        pf[k] = NO_FORCES;
         if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
         motion_of_point(k, y, trig, p, &kin[k]);
         forces_at(&kin[k], &p->point[k], p, &pf[k]);
