@@ -203,11 +203,12 @@ def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
     from impactgen.reference import ReferenceModel
     model = compile_model(model_spec(paper_scene))
     params = fill_params(model, paper_scene)
-    params.phase = model.lib.MODEL_PHASE_ELASTOPLASTIC
+    tip = model.lib.MODEL_TIP_POINT
+    params.point[tip].phase = model.lib.MODEL_PHASE_ELASTOPLASTIC
     contact = ReferenceModel.from_scene(paper_scene).contact
     for w in np.geomspace(1.9, 1e4, 200):
         delta = w * contact.delta_c
-        c_force, exact = model.lib.model_normal_force(delta, params), contact.jackson_green(delta)
+        c_force, exact = model.lib.model_normal_force(tip, delta, params), contact.jackson_green(delta)
         assert c_force == pytest.approx(exact, rel=2e-14, abs=0.0), w
 
 
