@@ -18,7 +18,7 @@ from sympy.printing.c import C99CodePrinter
 
 from . import contact as law
 from . import machine
-from .expressions import ModelExpressions, assemble_model
+from .expressions import TIP, ModelExpressions, assemble_model
 from .parameters import RULES, Field
 from .spec import PHASES, STATE_LAW, STATES, ModelSpec
 
@@ -159,7 +159,7 @@ class Kernel:
     """One C function body: what it unpacks (states, parameters, sin/cos) and its blocks."""
 
     q: tuple[tuple[int, str], ...]  # (index into y, name)
-    params: tuple[str, ...]
+    params: tuple[tuple[str, str], ...]  # (name, where: "p" the struct, "pc" the point's record)
     trig: tuple[tuple[str, str, str, int], ...]  # (name, "sin"|"cos", angle, its slot in trig[])
     blocks: tuple[CBlock, ...]
     trig_only: frozenset[str] = frozenset()  # angles read only through their sin and cos
@@ -176,7 +176,8 @@ def _kernel(model: ModelExpressions, blocks: list[CBlock], extra: tuple = ()) ->
     reads |= trig_only
     states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
     used_states = tuple((i, name) for i, name in states if name in reads)
-    params = tuple(f.name for f in model.params if f.name in reads)
+    params = tuple((f.name, "p") for f in model.params if f.name in reads) + tuple(
+        (f.name, "pc") for f in model.point_params if f.name in reads)
     return Kernel(used_states, params, tuple(trig), tuple(blocks), trig_only)
 
 
@@ -191,20 +192,16 @@ class EmitContext:
     nstate: int
     state_names: tuple[str, ...]
     params: tuple[Field, ...]  # the parameter struct, in order
+    point_params: tuple[Field, ...]  # each contact point's record, point[k]
     phases: list[tuple[str, int]]  # (PHASE name, params.phase code) of each force law
     events: list[dict]  # name (upper case), doc, C expression
     outputs: list[tuple[str, str]]  # (name, doc)
-    rhs: Kernel
-    rhs_tip: CBlock  # tip kinematics the right-hand side needs
-    kane: CBlock  # M (lower triangle) and f of Kane's equations
-    friction_block: CBlock | None  # s and F_f
-    constrained: bool  # a phase holds a tip velocity by a constraint force
-    tip_jacobian: CBlock
-    tip_jacobian_x: CBlock
-    event_forces: list[str]  # forces the event functions read (solved with the accelerations)
-    works: list[tuple[str, str, str]]  # (target, C, doc) of the work states' derivatives
-    events_kernel: Kernel
-    ev_tip: CBlock
+    kane: Kernel  # M (lower triangle) and f of Kane's equations, without contact forces
+    friction: Kernel | None  # s and F_f of a point, in its own v_x and its view of the parameters
+    constrained: bool  # a phase holds a point's velocity by a constraint force
+    event_forces: bool  # the event functions read forces (solved with the accelerations)
+    point_events: list[dict]  # each point's events: name, C expression in pt.* (its forces) and at.* (its view)
+    points: list[dict]  # the contact points, joints then the tip: k, number, motion kernel, curvature kernel
     outputs_kernel: Kernel
     out_tip: CBlock
     energies: CBlock
@@ -248,41 +245,45 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
 
     tip = {v.name: t(v.expr) for v in model.tip}
 
-    def tip_block(names: list[str]) -> CBlock:
-        return c_block([(k, tip[k]) for k in names], "tip")
-
-    # Right-hand side: tip kinematics, contact forces, Kane's equations M du/dt = f.
-    rhs_tip = tip_block(["delta", "v_Bx", "v_By"] if spec.has_friction else ["delta", "v_By"])
+    # Kane's equations M du/dt = f without contact; each contact point adds J^T (F_f, F) in C
     M = chain.mass_matrix
     kane = c_block([(f"M[{i * n + j}]", t(M[i, j])) for i in range(n) for j in range(i + 1)]
                    + [(f"f[{i}]", t(model.forcing[i])) for i in range(n)], "kin")
     friction = None
-    if model.friction_force is not None:  # F_f = -mu F s, with s kept by name for sustained contact
-        s_f = sm.Symbol("s")
-        friction = c_block([("s", model.friction_sign),
-                            ("F_f", model.friction_force.subs(model.friction_sign, s_f))], "fr")
-    tip_jacobian = c_block([(r.name, t(r.expr)) for r in model.tip_jacobian
-                            if spec.has_friction or not r.name.startswith("Jx")], "tj")
-    tip_jacobian_x = c_block([(r.name, t(r.expr)) for r in model.tip_jacobian
-                              if r.name.startswith("Jx") or r.name == "Jdot_u[0]"], "tj")
-    rhs_blocks = [rhs_tip, kane] + ([friction] if friction else [])
-    if spec.constrained:
-        rhs_blocks += [tip_jacobian]
-    found = {sm.Symbol(k): sm.Symbol(f"c.{k}") for k in ("F", "F_f", "v_Bx", "v_By")}  # tip_forces c
-    works = [(f"ydot[{2 * n + k}]", ccode(sm.sympify(w.expr).xreplace(found)), w.doc)
-             for k, w in enumerate(model.integrals)]
+    if model.friction_force is not None:  # F_f = -mu F s in the point's own v_x, s kept by name for holds
+        v_x, s_f = sm.Symbol("v_x"), sm.Symbol("s")
+        sign = sm.sympify(model.friction_sign).xreplace({TIP["v_Bx"]: v_x})
+        friction = _kernel(model, [c_block([("s", sign), ("F_f", model.friction_force.subs(model.friction_sign, s_f))],
+                                          "fr")])
+    points = []
+    for k, pm in enumerate(model.points):
+        motion = c_block([(f"m->{r.name}", t(r.expr)) for r in pm.motion], "pm")
+        entry = {"k": k, "number": pm.number, "tip": pm.number == n, "kernel": _kernel(model, [motion])}
+        if spec.jacobian:
+            curvature = c_block([(f"c->{r.name}", t(r.expr)) for r in pm.curvature
+                                 if spec.has_friction or not r.name.startswith(("Hx", "dv_x"))], "pc")
+            entry["curvature"] = _kernel(model, [curvature])
+        points.append(entry)
 
-    # Events: only delta and its rate are needed.
-    ev_tip = tip_block(["delta", "delta_rate"])
+    # Events: each point's, in its own quantities (pt, from point_at) and its view of the parameters (at)
+    point_names = {f.name for f in model.point_params}
+    names = {f.name for f in model.params} | point_names
+    own = {TIP["delta"]: sm.Symbol("pt.delta"), TIP["delta_rate"]: sm.Symbol("pt.delta_rate"),
+           TIP["v_Bx"]: sm.Symbol("pt.v_x"), chain.symbols.F: sm.Symbol("pt.F"),
+           chain.symbols.F_f: sm.Symbol("pt.F_f")}
     events = [{"name": e.name.upper(), "doc": e.doc, "expr": ccode(e.expr)} for e in model.events]
-    event_reads = _reads([e.expr for e in model.events])
-    event_forces = [name for name in ("F", "F_f", "v_Bx") if name in event_reads]
+    point_events = []
+    for e in model.events:
+        expr = sm.sympify(e.expr)
+        view = {x: sm.Symbol(f"{'pc' if str(x) in point_names else 'p'}->{x}") for x in expr.free_symbols
+                if str(x) in names}
+        point_events.append({"name": e.name.upper(), "expr": ccode(expr.xreplace({**own, **view}))})
+    event_forces = bool(_reads([e.expr for e in model.events]) & {"F", "F_f"})
 
-    # Outputs: every tip quantity, the forces, the energies.
-    out_tip = tip_block([v.name for v in model.tip])
+    # Outputs: the tip's kinematics, the forces (point_at), the energies.
+    out_tip = c_block([(v.name, tip[v.name]) for v in model.tip], "tip")
     tip_names = {v.name for v in model.tip} | {"F", "F_f"}
     energies = c_block([(o.name, t(o.expr)) for o in model.outputs if o.name not in tip_names], "en")
-    out_blocks = [out_tip, energies] + ([friction] if friction and not spec.constrained else [])
 
     force_cases = []
     slopes = dict(model.jacobian.force_slopes) if model.jacobian else {}
@@ -299,25 +300,22 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     if model.jacobian is not None:
         J = model.jacobian
         entries = [(f"G[{i * 2 * n + j}]", t(J.G[i, j])) for i in range(n) for j in range(2 * n)]
-        entries += [(f"Jw[{k * 2 * n + j}]", t(J.works[k, j])) for k in range(J.works.rows) for j in range(2 * n)]
         jac_block = c_block(entries, "jac")
-        jac_blocks = [rhs_tip, kane, jac_block] + ([friction] if friction else [])
         udot_used = [i for i in range(n) if f"udot{i + 1}" in jac_block.reads]
-        jac = {"block": jac_block, "kernel": _kernel(model, jac_blocks), "nworks": J.works.rows,
-               "udot": udot_used}
+        jac = {"kernel": _kernel(model, [jac_block]), "udot": udot_used,
+               "friction": _kernel(model, [c_block([(r.name, r.expr) for r in J.friction_slopes], "fs")])
+               if J.friction_slopes else None}
 
     params = model.params
-    joints = _joints(model, t) if model.joints else None
+    joints = _joints(model) if model.joints else None
     present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
     return EmitContext(
         prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
-        params=model.params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
+        params=model.params, point_params=model.point_params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
         outputs=[(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else []),
-        rhs=_kernel(model, rhs_blocks), rhs_tip=rhs_tip,
-        kane=kane, friction_block=friction, constrained=spec.constrained, tip_jacobian=tip_jacobian,
-        tip_jacobian_x=tip_jacobian_x, event_forces=event_forces, works=works,
-        events_kernel=_kernel(model, [ev_tip], tuple(e.expr for e in model.events)), ev_tip=ev_tip,
-        outputs_kernel=_kernel(model, out_blocks), out_tip=out_tip, energies=energies,
+        kane=_kernel(model, [kane]), friction=friction, constrained=spec.constrained,
+        event_forces=event_forces, point_events=point_events, points=points,
+        outputs_kernel=_kernel(model, [out_tip, energies]), out_tip=out_tip, energies=energies,
         force_cases=force_cases, jac=jac,
         api_version=machine.API_VERSION, structure_hash=machine.structure_hash(model),
         thresholds=machine.THRESHOLDS, all_states=STATES,
@@ -329,59 +327,29 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     )
 
 
-# What a joint's contact adds to the model, per joint, in this order: its outputs (the tip's
-# are named x_B, delta, F, ...), and the fields of its contact state in the parameters: the
-# machine's (phase aside) and the constants its own radius gives (`<prefix>_derive`).
+# What a joint's contact adds to the model, per joint: its outputs (the tip's are named x_B,
+# delta, F, ...).
 POINT_OUTPUTS = (("delta", "penetration, m"), ("delta_rate", "d(delta)/dt, m/s"), ("v_x", "velocity x, m/s"),
                  ("v_y", "velocity y, m/s"), ("F", "normal contact force, N"), ("F_f", "friction force along x, N"))
-POINT_FIELDS = ("y_s", "R", "delta_c", "P_c", "inv_delta_c", "theta_c", "delta_m", "delta_r", "R_res", "slip",
-                "s_frozen")
 
 
-def _joints(model: ModelExpressions, t) -> dict:
-    """The joints that can touch the surface, as the templates print them: each one's motion
-    (a block per joint), the friction law and the tip's events in its own quantities (`pt`,
-    from <prefix>_joint_forces) and its own contact state and constants (`at`, the
-    parameters as the joint sees them), and the outputs per joint."""
-    from .expressions import TIP
+def _joints(model: ModelExpressions) -> dict:
+    """The joints that can touch the surface, as the headers and the machine name them: their
+    numbers, their contact fields and constants in the parameters, and their outputs."""
     spec = model.spec
-    names = {f.name for f in model.params}
-    motion = []
-    for k, jm in enumerate(model.joints):
-        block = c_block([(f"m->{r.name}", t(r.expr)) for r in jm.motion], "jm")
-        motion.append({"k": k, "joint": jm.joint, "block": block, "kernel": _kernel(model, [block])})
-    v_x = sm.Symbol("v_x")
-    friction = None
-    if model.friction_force is not None:
-        s_f = sm.Symbol("s")
-        sign = sm.sympify(model.friction_sign).xreplace({TIP["v_Bx"]: v_x})
-        friction = c_block([("s", sign), ("F_f", model.friction_force.subs(model.friction_sign, s_f))], "fr")
-    own = {TIP["delta"]: sm.Symbol("pt.delta"), TIP["delta_rate"]: sm.Symbol("pt.delta_rate"),
-           TIP["v_Bx"]: sm.Symbol("pt.v_x"), model.chain.symbols.F: sm.Symbol("pt.F"),
-           model.chain.symbols.F_f: sm.Symbol("pt.F_f")}
-    events = []
-    for e in model.events:
-        expr = sm.sympify(e.expr)
-        view = {x: sm.Symbol(f"at.{x}") for x in expr.free_symbols if str(x) in names}
-        events.append({"name": e.name.upper(), "expr": ccode(expr.xreplace({**own, **view}))})
-    fields = [f for f in POINT_FIELDS if f in names]
-    return {"joints": [jm.joint for jm in model.joints], "motion": motion, "friction": friction,
-            "friction_kernel": _kernel(model, [friction]) if friction else None, "events": events,
-            "fields": fields, "constants": [f for f in ("R", "delta_c", "P_c", "inv_delta_c", "theta_c") if f in names],
+    return {"joints": [jm.number for jm in model.joints],
+            "motion": [{"k": k, "joint": jm.number} for k, jm in enumerate(model.joints)],
             "outputs": [(f"{o}_J{j}", f"joint {j}: {doc}") for j in spec.joints for o, doc in POINT_OUTPUTS],
             "point_fields": [o for o, _ in POINT_OUTPUTS],
             "output_names": {f"{o}_J{j}" for j in spec.joints for o, _ in POINT_OUTPUTS}}
 
 
 def _net(model: ModelExpressions, t) -> dict:
-    """The heights above the surface of the joints and the tip (the floor net), and the
-    gradient of d(delta)/dt over the state (the tip's normal acceleration, for the start rule),
-    as blocks with what they unpack."""
+    """The heights above the surface of the joints and the tip (the floor net), as a block
+    with what it unpacks."""
     heights = c_block([(f"h[{k}]", t(h.expr)) for k, h in enumerate(model.heights)], "ht")
-    gradient = c_block([(f"g[{k}]", t(e)) for k, e in enumerate(model.rate_gradient)], "rg")
     return {"points": [h.name for h in model.heights], "heights": heights,
-            "heights_kernel": _kernel(model, [heights]), "gradient": gradient,
-            "gradient_kernel": _kernel(model, [gradient])}
+            "heights_kernel": _kernel(model, [heights])}
 
 
 def _tidy(text: str) -> str:

@@ -15,7 +15,7 @@ import sympy as sm
 
 from . import contact as law
 from .mechanics import ChainEquations, chain_equations
-from .parameters import Field, fields
+from .parameters import Field, fields, point_fields
 from .spec import PHASES, ModelSpec
 
 y_s = sm.Symbol("y_s")  # surface height
@@ -56,36 +56,44 @@ class Named:
 
 @dataclass(frozen=True)
 class JacobianExpressions:
-    """d(ydot)/dy by the chain rule through the contact force. In terms of the tip
-    quantities, F, F_f, the slope dF = dF/d(delta) of the active law and the accelerations
-    udot_k (solved first); G is n x 2n, the acceleration rows are M^-1 G."""
+    """d(ydot)/dy of the chain without its contact forces, and the slopes of the force laws;
+    each contact point's forces are added by the chain rule in C, from its PointMotion."""
 
     force_slopes: tuple[tuple[str, sm.Expr], ...]  # (phase, dF/d(delta))
-    G: sm.Matrix  # df/dy - (dM/dy) udot, total derivatives
-    works: sm.Matrix  # rows of the work states, one per work, 2n columns
+    G: sm.Matrix  # d(f0)/dy - (dM/dy) udot, f0 the forcing without contact; n x 2n, udot_k solved first
+    friction_slopes: tuple[Named, ...] = ()  # dFf_dF, dFf_dv: F_f's derivatives over F and the point's v_x
 
 
 @dataclass(frozen=True)
-class JointMotion:
-    """Joint `joint` (the end of that link) as a contact point: its height and velocity, and
-    the rows of its velocity Jacobian v = J u with the terms (dJ/dt) u. A force (F_x, F_y) on
-    it enters Kane's equations as J^T (F_x, F_y), as the tip's does."""
+class PointMotion:
+    """A contact point (joint k, the end of link k, or the tip as point n): its height and
+    velocity, the rows of its velocity Jacobian v = J u with the terms (dJ/dt) u, and, for the
+    analytic Jacobian, the derivatives of J and of v over the angles. A force (F_x, F_y) on it
+    enters Kane's equations as J^T (F_x, F_y), whichever point it is."""
 
-    joint: int  # 1 to n - 1
+    number: int  # 1 to n - 1: a joint; n: the tip
     motion: tuple[Named, ...]  # y, v_x, v_y, Jx[i], Jy[i], Jdot_u[0] (x), Jdot_u[1] (y)
+    curvature: tuple[Named, ...] = ()  # the nonzero Hx[i n + j] = dJx_i/dq_j, Hy[..], dv_x[j] = dv_x/dq_j, dv_y[j]
 
 
-def _joint_motion(chain: ChainEquations, joint: int) -> JointMotion:
+def _point_motion(chain: ChainEquations, number: int) -> PointMotion:
     s = chain.symbols
-    x, y = chain.joint_x[joint - 1], chain.joint_y[joint - 1]
+    n = chain.n
+    x, y = chain.tip_position if number == n else (chain.joint_x[number - 1], chain.joint_y[number - 1])
     v = [sum(r.diff(q) * u for q, u in zip(s.q, s.u)) for r in (x, y)]
-    rows = [Named("y", y, f"height of joint {joint}, m"),
+    what = "the tip" if number == n else f"joint {number}"
+    rows = [Named("y", y, f"height of {what}, m"),
             Named("v_x", v[0], "its velocity x, m/s"), Named("v_y", v[1], "its velocity y, m/s")]
     for axis, vel in zip("xy", v):
         rows += [Named(f"J{axis}[{i}]", vel.diff(u), f"dv_{axis}/du{i + 1}") for i, u in enumerate(s.u)]
     rows += [Named(f"Jdot_u[{k}]", sum(vel.diff(q) * u for q, u in zip(s.q, s.u)), f"(dJ_{axis}/dt) u")
              for k, (axis, vel) in enumerate(zip("xy", v))]
-    return JointMotion(joint, tuple(rows))
+    curvature = []
+    for axis, vel in zip("xy", v):
+        curvature += [Named(f"H{axis}[{i * n + j}]", vel.diff(u).diff(q), f"dJ{axis}_{i}/dq{j + 1}")
+                      for i, u in enumerate(s.u) for j, q in enumerate(s.q)]
+        curvature += [Named(f"dv_{axis}[{j}]", vel.diff(q), f"dv_{axis}/dq{j + 1}") for j, q in enumerate(s.q)]
+    return PointMotion(number, tuple(rows), tuple(c for c in curvature if c.expr != 0))
 
 
 @dataclass(frozen=True)
@@ -94,12 +102,11 @@ class ModelExpressions:
 
     spec: ModelSpec
     chain: ChainEquations
-    forcing: sm.Matrix  # the chain's forcing, with F_f = 0 when friction is pruned
+    forcing: sm.Matrix  # the chain's forcing without contact forces (each point adds J^T F in C)
     tip: tuple[Named, ...]  # x_B, y_B, v_Bx, v_By, delta, delta_rate
     force_cases: tuple[ForceCase, ...]
     friction_force: sm.Expr | None  # F_f in terms of F and v_Bx (and slip, for exact Coulomb)
     friction_sign: sm.Expr | None  # s of F_f = -mu F s: regularized sign of v_Bx, or slip
-    tip_jacobian: tuple[Named, ...]  # v_B = J_B u: rows Jx, Jy and the terms Jdot u
     events: tuple[Named, ...]
     outputs: tuple[Named, ...]
     works: tuple[Named, ...]  # power of each contact force: integrated as extra states
@@ -109,8 +116,13 @@ class ModelExpressions:
     # P_normal[, P_friction] that the impact coefficients are made of (docs/model.md section 9)
     impulses: tuple[Named, ...] = ()
     heights: tuple[Named, ...] = ()  # joints 1..n-1, then the tip: height above the surface (floor net)
-    rate_gradient: tuple[sm.Expr, ...] = ()  # d(delta_rate)/d(q, u): the tip's normal acceleration
-    joints: tuple[JointMotion, ...] = ()  # the joints that can touch the surface (spec.joints)
+    points: tuple[PointMotion, ...] = ()  # the contact points: the joints that can touch the surface, then the tip
+    point_params: tuple[Field, ...] = ()  # the fields of each point's record, point[k]
+
+    @property
+    def joints(self) -> tuple[PointMotion, ...]:
+        """The joints with contact code (spec.joints): every contact point but the tip."""
+        return self.points[:-1]
 
     @property
     def point_integrals(self) -> tuple[str, ...]:
@@ -118,7 +130,7 @@ class ModelExpressions:
         W_friction_J<k>], P_normal_J<k>[, P_friction_J<k>] (W_normal and W_friction are every
         point's together, the budget's terms; P_normal and P_friction are the tip's own)."""
         kinds = ("normal", "friction") if self.spec.has_friction else ("normal",)
-        return tuple(f"{integral}_{kind}_J{jm.joint}" for jm in self.joints for integral in ("W", "P")
+        return tuple(f"{integral}_{kind}_J{jm.number}" for jm in self.joints for integral in ("W", "P")
                      for kind in kinds)
 
     @property
@@ -214,14 +226,13 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
         used |= sm.sympify(e).free_symbols
     params = fields(spec.links, spec.friction_law, {str(x) for x in used}, spec.joints)
+    point_params = point_fields(spec.friction_law, {str(x) for x in used})
 
-    forcing = chain.forcing if spec.has_friction else chain.forcing.subs(s.F_f, 0)
-    jacobian = _jacobian(chain, forcing, tuple(cases), friction_force, tuple(works + impulses)) if spec.jacobian else None
-    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign,
-                            _tip_jacobian(chain) if spec.constrained else (), tuple(events),
+    forcing = chain.forcing.subs({s.F: 0, s.F_f: 0})  # gravity and the motion; contact enters per point
+    jacobian = _jacobian(chain, forcing, tuple(cases), friction_force) if spec.jacobian else None
+    return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign, tuple(events),
                             tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain),
-                            tuple(-v_By.diff(x) for x in s.q + s.u),
-                            tuple(_joint_motion(chain, j) for j in spec.joints))
+                            tuple(_point_motion(chain, k) for k in (*spec.joints, spec.links)), point_params)
 
 
 def _heights(chain: ChainEquations) -> tuple[Named, ...]:
@@ -238,50 +249,24 @@ def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:
     return (law.E_star, law.R) + ((law.delta_c, law.delta_r, law.R_res) if spec.plastic else ())
 
 
-def _tip_jacobian(chain: ChainEquations) -> tuple[Named, ...]:
-    """v_B = J_B u and dv_B/dt = J_B du/dt + (dJ_B/dt) u: what a constraint on v_B needs.
-    A tip force (F_x, F_y) enters Kane's equations as J_B^T (F_x, F_y)."""
-    s = chain.symbols
-    rows = []
-    for k, (axis, v) in enumerate(zip("xy", chain.tip_velocity)):
-        rows += [Named(f"J{axis}[{i}]", v.diff(u), f"dv_B{axis}/du{i + 1}") for i, u in enumerate(s.u)]
-        rows.append(Named(f"Jdot_u[{k}]", sum(v.diff(q) * u for q, u in zip(s.q, s.u)),
-                          f"(dJ_B{axis}/dt) u"))
-    return tuple(rows)
-
-
 def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase, ...],
-              friction_force: sm.Expr | None, works: tuple[Named, ...]) -> JacobianExpressions:
+              friction_force: sm.Expr | None) -> JacobianExpressions:
+    """G = d(f0)/dy - (dM/dy) udot of the chain without contact, the slope of each force law
+    and F_f's derivatives: what the chain rule through each point's forces needs."""
     s = chain.symbols
     n = chain.n
     y = list(s.q) + list(s.u)
     udot = sm.symbols(f"udot1:{n + 1}")
-    dF = sm.Symbol("dF")  # slope of the active normal-force law
-    _, y_B = chain.tip_position
-    v_Bx, v_By = chain.tip_velocity
-    d_delta = [-y_B.diff(v) for v in y]
-    dF_dy = [dF * d for d in d_delta]
-    if friction_force is not None:
-        dFf_dF, dFf_dv = friction_force.diff(s.F), friction_force.diff(TIP["v_Bx"])
-        dFf_dy = [dFf_dF * a + dFf_dv * v_Bx.diff(v) for a, v in zip(dF_dy, y)]
-    else:
-        dFf_dy = [0] * len(y)
     M = chain.mass_matrix
     G = sm.zeros(n, 2 * n)
     for i in range(n):
-        df_dF, df_dFf = forcing[i].diff(s.F), forcing[i].diff(s.F_f)
         for j, v in enumerate(y):
             dM_udot = sum(M[i, k].diff(v) * udot[k] for k in range(n)) if j < n else 0
-            G[i, j] = forcing[i].diff(v) + df_dF * dF_dy[j] + df_dFf * dFf_dy[j] - dM_udot
-    rows = []
-    for w in works:  # power of each contact force: F v_By, F_f v_Bx; the forces themselves (impulses)
-        if w.name == "P_normal":
-            rows.append(list(dF_dy))
-        elif w.name == "P_friction":
-            rows.append(list(dFf_dy))
-        elif w.name == "normal":
-            rows.append([a * TIP["v_By"] + s.F * v_By.diff(v) for a, v in zip(dF_dy, y)])
-        else:
-            rows.append([a * TIP["v_Bx"] + s.F_f * v_Bx.diff(v) for a, v in zip(dFf_dy, y)])
+            G[i, j] = forcing[i].diff(v) - dM_udot
     slopes = tuple((c.phase, sm.diff(c.expr, law.delta)) for c in cases)
-    return JacobianExpressions(slopes, G, sm.Matrix(rows))
+    friction = ()
+    if friction_force is not None:  # in the point's own v_x
+        v_x = sm.Symbol("v_x")
+        F_f = friction_force.xreplace({TIP["v_Bx"]: v_x})
+        friction = (Named("dFf_dF", F_f.diff(s.F), "dF_f/dF"), Named("dFf_dv", F_f.diff(v_x), "dF_f/dv_x"))
+    return JacobianExpressions(slopes, G, friction)

@@ -20,7 +20,7 @@ from .expressions import ModelExpressions
 from .spec import STATES
 from .thresholds import THRESHOLD, THRESHOLDS  # noqa: F401 (the machine prints them)
 
-API_VERSION = 2  # the C API of model.h and model_machine.h: bumped when a signature or a struct changes (2: m.tip)
+API_VERSION = 3  # the C API of model.h and model_machine.h: bumped when a signature or a struct changes (2: m.tip; 3: every contact point's record in params.point[k] and machine.point[k], the tip's at MODEL_TIP_POINT)
 
 
 @dataclass(frozen=True)

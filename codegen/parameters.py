@@ -16,7 +16,9 @@ Kinds:
 
 A per-link row (`per_link`) stands for n fields: `L1`, `L2`, ... and `chain.length[1]`, ...;
 a per-joint row (`per_joint`) for one field per joint that can touch the surface (`R_joint2`,
-`contact.joint_radius[2]`): a model without such joints has none.
+`contact.joint_radius[2]`): a model without such joints has none. A per-point row (`per_point`)
+is a field of every contact point's own record, `point[k]` (the joints that can touch the
+surface, then the tip): the constants its radius gives and the state the machine keeps for it.
 """
 from __future__ import annotations
 
@@ -38,6 +40,7 @@ class Parameter:
     needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "frozen" | "used"
     per_link: bool = False
     per_joint: bool = False
+    per_point: bool = False  # a field of each contact point's record (point[k].name), not of the struct
     # the value from a scene (a per-link row: the tuple of the links'): the attribute it names
     # (attrgetter: no Python call per row and run), or what a function computes from the scene
     read: Callable[[Any], Any] | None = None
@@ -115,24 +118,24 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("eps", "contact.friction_eps", "m/s", "regularization speed of the friction sign", "input",
               needs="regularized", read=attrgetter("contact.friction_eps"), **POSITIVE),
     Parameter("E_star", "", "Pa", "reduced modulus E* (Eq. 7)", "derived", needs="used"),
-    Parameter("R", "", "m", "reduced tip radius (Eq. 8)", "derived", needs="used"),
+    Parameter("R", "", "m", "reduced radius of the point's contact (Eq. 8)", "derived", needs="used", per_point=True),
     Parameter("C_j", "", "1", "critical yield coefficient", "derived", needs="used"),
-    Parameter("delta_c", "", "m", "critical deformation", "derived", needs="used"),
-    Parameter("P_c", "", "N", "critical load", "derived", needs="used"),
+    Parameter("delta_c", "", "m", "critical deformation", "derived", needs="used", per_point=True),
+    Parameter("P_c", "", "N", "critical load", "derived", needs="used", per_point=True),
     Parameter("B", "", "1", "Jackson-Green exponent 0.14 exp(23 S_y/E*)", "derived", needs="used"),
     Parameter("inv_delta_c", "", "1/m", "1/delta_c (the elasto-plastic law multiplies by it)", "derived",
-              needs="used"),
+              needs="used", per_point=True),
     Parameter("theta_c", "", "1", "pi a/R of the Jackson-Green law at delta = delta_c: "
-              "pi (delta_c/R)^(1/2) 1.9^(-B/2)", "derived", needs="used"),
-    Parameter("y_s", "", "m", "surface level now (moves to where a resting tip lifts off)", "machine"),
-    Parameter("delta_m", "", "m", "maximum compression of the current impact", "machine", needs="used"),
+              "pi (delta_c/R)^(1/2) 1.9^(-B/2)", "derived", needs="used", per_point=True),
+    Parameter("y_s", "", "m", "the surface level under the point now (moves to where a resting point lifts off)", "machine", per_point=True),
+    Parameter("delta_m", "", "m", "maximum compression of the current impact", "machine", needs="used", per_point=True),
     Parameter("delta_r", "", "m", "permanent deformation (set at maximum compression)", "machine",
-              needs="used"),
-    Parameter("R_res", "", "m", "unloading radius (set at maximum compression)", "machine", needs="used"),
-    Parameter("slip", "", "1", "exact Coulomb: +1 or -1 while the tip slips that way, 0 while it sticks",
-              "machine", needs="coulomb"),
-    Parameter("s_frozen", "", "1", "frozen friction: the sign of the tip's tangential speed at contact start, "
-              "kept for the whole contact", "machine", needs="frozen"),
+              needs="used", per_point=True),
+    Parameter("R_res", "", "m", "unloading radius (set at maximum compression)", "machine", needs="used", per_point=True),
+    Parameter("slip", "", "1", "exact Coulomb: +1 or -1 while the point slips that way, 0 while it sticks",
+              "machine", needs="coulomb", per_point=True),
+    Parameter("s_frozen", "", "1", "frozen friction: the sign of the point's tangential speed at contact start, "
+              "kept for the whole contact", "machine", needs="frozen", per_point=True),
 )
 
 BY_NAME = {p.name: p for p in PARAMETERS}
@@ -218,9 +221,15 @@ class Field:
 
 def fields(links: int, friction_law: str, used: set[str], joints: tuple[int, ...] = ()) -> tuple[Field, ...]:
     """The parameter struct of a model with `links` links, this friction law and contact at
-    `joints`, whose expressions (force laws, events, switch laws) read the symbols in `used`."""
+    `joints`, whose expressions (force laws, events, switch laws) read the symbols in `used`
+    (without the per-point fields: `point_fields`)."""
     return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction_law, used)
-                 for name, key, link in p.names(links, joints))
+                 and not p.per_point for name, key, link in p.names(links, joints))
+
+
+def point_fields(friction_law: str, used: set[str]) -> tuple[Field, ...]:
+    """The fields of each contact point's record, point[k], in the same model."""
+    return tuple(Field(p.name, "", p, 0) for p in PARAMETERS if p.per_point and included(p, friction_law, used))
 
 
 def markdown_table() -> str:
@@ -228,7 +237,8 @@ def markdown_table() -> str:
     kinds = {"input": "scene", "derived": "derived", "machine": "machine"}
     rows = ["| C field | scene key / FMU variable | unit | set by | range | what |", "|---|---|---|---|---|---|"]
     for p in PARAMETERS:
-        name = f"{p.name}1..{p.name}n" if p.per_link else f"{p.name}i" if p.per_joint else p.name
+        name = (f"{p.name}1..{p.name}n" if p.per_link else f"{p.name}i" if p.per_joint
+                else f"point[k].{p.name}" if p.per_point else p.name)
         key = p.key.replace("{i}", "i") if p.key else ""
         when = {"always": "", "friction": " (with friction)", "regularized": " (regularized friction)",
                 "coulomb": "", "frozen": "", "used": ""}[p.needs]

@@ -72,16 +72,21 @@ def test_pruned_scene_generates_no_friction_and_no_plastic_code():
 
 @needs_cc
 @pytest.mark.parametrize("spec", [ModelSpec(1, "hertz", "none"), ModelSpec(2), ModelSpec(6),
-                                  ModelSpec(3, "three-phase", "none"), ModelSpec(2, "hertz", "regularized")],
+                                  ModelSpec(3, "three-phase", "none"), ModelSpec(2, "hertz", "regularized"),
+                                  ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
+                                  ModelSpec(3, "hertz", "none", True, joints=(2,)),
+                                  ModelSpec(3, "three-phase", "coulomb", True, True, (1, 2)),
+                                  ModelSpec(2, "three-phase", "none", True, True)],
                          ids=lambda s: s.slug)
 def test_model_c_compiles_standalone_without_warnings(tmp_path, spec):
     gen = generate_model(spec)
     (tmp_path / "model.h").write_text(gen.header)
     (tmp_path / "model.c").write_text(gen.source)
-    res = subprocess.run([CC, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-Wshadow",
-                          "-Wconversion", "-c", "model.c", "-o", "model.o"],
-                         cwd=tmp_path, capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
+    for optimization in ("-O0", "-O3"):  # -O3 inlines, and so sees more (maybe-uninitialized)
+        res = subprocess.run([CC, "-std=c99", "-pedantic", optimization, "-Wall", "-Wextra", "-Werror", "-Wshadow",
+                              "-Wconversion", "-c", "model.c", "-o", "model.o"],
+                             cwd=tmp_path, capture_output=True, text=True)
+        assert res.returncode == 0, res.stderr
 
 
 @needs_cc
@@ -97,9 +102,10 @@ def test_model_embeds_in_a_plain_c_program(tmp_path):
         #include "model.h"
         int main(void) {
             model_params p = {0};
-            p.L1 = 1.0; p.L2 = 1.0; p.m1 = 1.0; p.m2 = 1.0; p.g = 9.81; p.y_s = -1.7735;
-            p.E_star = 1.15e11; p.R = 0.005; p.mu = 0.2; p.eps = 1e-6;
-            p.phase = MODEL_PHASE_ELASTIC;
+            model_point_contact *tip = &p.point[MODEL_TIP_POINT];
+            p.L1 = 1.0; p.L2 = 1.0; p.m1 = 1.0; p.m2 = 1.0; p.g = 9.81; tip->y_s = -1.7735;
+            p.E_star = 1.15e11; tip->R = 0.005; p.mu = 0.2; p.eps = 1e-6;
+            tip->phase = MODEL_PHASE_ELASTIC;
             const double y[MODEL_NSTATE] = {-1.2, -1.0, -0.1, -0.2, 0.0, 0.0, 0.0, 0.0};
             double ydot[MODEL_NSTATE];
             if (model_rhs(0.0, y, ydot, &p) != 0) return 1;
@@ -115,10 +121,10 @@ def test_model_embeds_in_a_plain_c_program(tmp_path):
 
     model = compile_model(ModelSpec(2))
     p = model.ffi.new("model_params *")
-    for k, v in dict(L1=1.0, L2=1.0, m1=1.0, m2=1.0, g=9.81, y_s=-1.7735, E_star=1.15e11, R=0.005,
-                     mu=0.2, eps=1e-6).items():
+    for k, v in dict(L1=1.0, L2=1.0, m1=1.0, m2=1.0, g=9.81, E_star=1.15e11, mu=0.2, eps=1e-6).items():
         setattr(p, k, v)
-    p.phase = model.lib.MODEL_PHASE_ELASTIC
+    tip = p.point[model.lib.MODEL_TIP_POINT]
+    tip.y_s, tip.R, tip.phase = -1.7735, 0.005, model.lib.MODEL_PHASE_ELASTIC
     y = model.ffi.new("double[]", [-1.2, -1.0, -0.1, -0.2, 0.0, 0.0, 0.0, 0.0])  # q, u, works, impulses
     ydot = model.ffi.new("double[]", 8)
     assert model.lib.model_rhs(0.0, y, ydot, p) == 0
@@ -155,15 +161,19 @@ def test_analytic_jacobian_matches_central_differences(spec):
               "mu": 0.2, "eps": 1e-3}
     values.update(inv_delta_c=1 / values["delta_c"],  # as model_derive makes them
                   theta_c=np.pi * np.sqrt(values["delta_c"] / values["R"]) * 1.9 ** (-values["B"] / 2))
+    tip = p.point[lib.MODEL_TIP_POINT]
     for name in model.param_names:
         if name in values:  # the constants the laws read (not the materials they come from)
             setattr(p, name, values[name])
+    for name, _ in ffi.typeof("model_point_contact").fields:  # and the tip's own
+        if name in values:
+            setattr(tip, name, values[name])
     for phase in model.phases:
-        p.phase = model.phases.index(phase) if phase != "restitution" else lib.MODEL_PHASE_RESTITUTION
+        tip.phase = model.phases.index(phase) if phase != "restitution" else lib.MODEL_PHASE_RESTITUTION
         for _ in range(3):
             y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
             y_B = sum(values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n))
-            p.y_s = y_B + 1.2e-5  # inside the contact, clear of every law's kinks
+            tip.y_s = y_B + 1.2e-5  # inside the contact, clear of every law's kinks
             J = ffi.new("double[]", N * N)
             assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
             J = np.array(list(J)).reshape(N, N)
@@ -193,9 +203,59 @@ def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
     from impactgen.reference import ReferenceModel
     model = compile_model(model_spec(paper_scene))
     params = fill_params(model, paper_scene)
-    params.phase = model.lib.MODEL_PHASE_ELASTOPLASTIC
+    tip = model.lib.MODEL_TIP_POINT
+    params.point[tip].phase = model.lib.MODEL_PHASE_ELASTOPLASTIC
     contact = ReferenceModel.from_scene(paper_scene).contact
     for w in np.geomspace(1.9, 1e4, 200):
         delta = w * contact.delta_c
-        c_force, exact = model.lib.model_normal_force(delta, params), contact.jackson_green(delta)
+        c_force, exact = model.lib.model_normal_force(tip, delta, params), contact.jackson_green(delta)
         assert c_force == pytest.approx(exact, rel=2e-14, abs=0.0), w
+
+
+@pytest.mark.parametrize("spec", [ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
+                                  ModelSpec(3, "hertz", "none", True, joints=(2,))], ids=lambda s: s.slug)
+def test_analytic_jacobian_covers_every_contact_point(spec):
+    """Every contact point's force enters the equations as J^T (F_f, F), and the analytic
+    Jacobian follows each of them: the joints and the tip all in contact at once, against
+    central differences of the right-hand side."""
+    from impactgen.build import compile_model
+    model = compile_model(spec)
+    ffi, lib = model.ffi, model.lib
+    rng = np.random.default_rng(7)
+    n, N = spec.links, model.nstate
+    p = ffi.new("model_params *")
+    law = {"E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0, "C_j": 1.6, "B": 0.175,
+           "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084, "mu": 0.2, "eps": 1e-3}
+    law.update(inv_delta_c=1 / law["delta_c"],
+               theta_c=np.pi * np.sqrt(law["delta_c"] / law["R"]) * 1.9 ** (-law["B"] / 2))
+    values = {**{f"L{i + 1}": rng.uniform(0.5, 1.5) for i in range(n)},
+              **{f"m{i + 1}": rng.uniform(0.5, 2.0) for i in range(n)}, "g": 9.81, **law}
+    for name in model.param_names:
+        if name in values:
+            setattr(p, name, values[name])
+    restitution = lib.MODEL_PHASE_RESTITUTION
+    own = [name for name, _ in ffi.typeof("model_point_contact").fields if name in law]
+    for phase in (1, restitution):
+        y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
+        heights = np.cumsum([values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n)])
+        for point, number in zip(p.point, (*spec.joints, n)):  # every point inside its own contact
+            point.phase, point.y_s = phase, heights[number - 1] + 1.1e-5
+            for name in own:
+                setattr(point, name, law[name])
+        J = ffi.new("double[]", N * N)
+        assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
+        J = np.array(list(J)).reshape(N, N)
+        fd = np.zeros((N, N))
+        for j in range(2 * n):
+            h = 1e-9 if j < n else 1e-8
+            out = []
+            for sign in (1, -1):
+                yy = y.copy()
+                yy[j] += sign * h
+                f = ffi.new("double[]", N)
+                assert lib.model_rhs(0.0, ffi.new("double[]", list(yy)), f, p) == 0
+                out.append(np.array(list(f)))
+            fd[:, j] = (out[0] - out[1]) / (2 * h)
+        scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
+        assert np.abs(fd[n:2 * n]).max() > 1e3  # the contact forces dominate the accelerations
+        assert np.all(np.abs(J - fd)[:, :2 * n] <= 1e-5 * scale + 1e-9), phase

@@ -104,7 +104,7 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
         if (start == MODEL_START_CONTACT) impact_begins(list, MODEL_NQ, r->t);
 #ifdef MODEL_NJOINT
         for (int k = 0; k < MODEL_NJOINT; ++k) {
-            if (m.joint[k].state != MODEL_MACHINE_FREE) impact_begins(list, model_joint_number(k), r->t);
+            if (m.point[k].state != MODEL_MACHINE_FREE) impact_begins(list, model_joint_number(k), r->t);
         }
 #endif
     }
@@ -124,7 +124,7 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
         n = 0;  /* the next call writes into emptied buffers */
         if (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL) continue;
         if (flag < 0) {
-            fprintf(stderr, "the integrator failed in %s at t = %g: %s\n", model_machine_state_name(m.tip.state), r->t,
+            fprintf(stderr, "the integrator failed in %s at t = %g: %s\n", model_machine_state_name(m.point[MODEL_TIP_POINT].state), r->t,
                     ig_solver_message(s));
             r->status = "failed";
         }

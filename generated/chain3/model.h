@@ -25,7 +25,7 @@ extern "C" {
 #define MODEL_NOUT 13
 #define MODEL_HAS_JACOBIAN 1
 
-/* Contact phases (MODEL section 4); params.phase selects the normal-force law. */
+/* Contact phases (MODEL section 4); a point's record's phase selects its normal-force law. */
 enum {
     MODEL_PHASE_FREE = 0,
     MODEL_PHASE_ELASTIC = 1,
@@ -59,6 +59,26 @@ enum {
     MODEL_OUT_V = 12  /* potential energy, J */
 };
 
+/* The contact points with contact code: the joints that can reach the surface (k from 0), then
+ * the tip (k = MODEL_TIP_POINT). Each has its own record in params.point[k]: its force law,
+ * the constants of its own radius (set by model_derive) and what the phase machine keeps
+ * for it. */
+#define MODEL_NCONTACT 1
+#define MODEL_TIP_POINT 0
+#define MODEL_NTIP_EVENT 5  /* each point's events, from MODEL_NTIP_EVENT * k for joint k - 1 ... */
+typedef struct {
+    int phase;  /* MODEL_PHASE_*: which normal-force law acts at the point */
+    double R;  /* reduced radius of the point's contact (Eq. 8), m */
+    double delta_c;  /* critical deformation, m */
+    double P_c;  /* critical load, N */
+    double inv_delta_c;  /* 1/delta_c (the elasto-plastic law multiplies by it), 1/m */
+    double theta_c;  /* pi a/R of the Jackson-Green law at delta = delta_c: pi (delta_c/R)^(1/2) 1.9^(-B/2) */
+    double y_s;  /* the surface level under the point now (moves to where a resting point lifts off), m */
+    double delta_m;  /* maximum compression of the current impact, m */
+    double delta_r;  /* permanent deformation (set at maximum compression), m */
+    double R_res;  /* unloading radius (set at maximum compression), m */
+} model_point_contact;
+
 /* Runtime parameters: one build serves every value of these. */
 typedef struct {
     double L1;  /* length of link 1, m (chain.length[1]) */
@@ -80,23 +100,15 @@ typedef struct {
     double mu;  /* friction coefficient (contact.friction) */
     double eps;  /* regularization speed of the friction sign, m/s (contact.friction_eps) */
     double E_star;  /* reduced modulus E* (Eq. 7), Pa */
-    double R;  /* reduced tip radius (Eq. 8), m */
     double C_j;  /* critical yield coefficient */
-    double delta_c;  /* critical deformation, m */
-    double P_c;  /* critical load, N */
     double B;  /* Jackson-Green exponent 0.14 exp(23 S_y/E*) */
-    double inv_delta_c;  /* 1/delta_c (the elasto-plastic law multiplies by it), 1/m */
-    double theta_c;  /* pi a/R of the Jackson-Green law at delta = delta_c: pi (delta_c/R)^(1/2) 1.9^(-B/2) */
-    double y_s;  /* surface level now (moves to where a resting tip lifts off), m */
-    double delta_m;  /* maximum compression of the current impact, m */
-    double delta_r;  /* permanent deformation (set at maximum compression), m */
-    double R_res;  /* unloading radius (set at maximum compression), m */
-    int phase;  /* MODEL_PHASE_*: which normal-force law is active */
+    model_point_contact point[1];  /* each contact point's record, the tip's last */
 } model_params;
 
 /* State y = [q1, q2, q3, u1, u2, u3, W_normal, W_friction, P_normal, P_friction]; W_* are the works of the contact forces, P_* their impulses. */
 int model_rhs(double t, const double *y, double *ydot, const model_params *p);
-double model_normal_force(double delta, const model_params *p);
+/* The normal force at penetration delta under the law of point k's record. */
+double model_normal_force(int k, double delta, const model_params *p);
 void model_events(double t, const double *y, double *ev, const model_params *p);
 void model_outputs(double t, const double *y, double *out, const model_params *p);
 /* J[i * NSTATE + j] = d ydot_i / d y_j (row-major); returns as model_rhs does. */
@@ -108,9 +120,9 @@ void model_heights(const double *y, double *h, const model_params *p);
 /* The tip's own works in y, J (the impact coefficients' terms): the works of every point's
  * forces, W_normal[, W_friction], less each joint's own (0 without friction). */
 void model_tip_works(const double *y, double *W_normal, double *W_friction);
-/* d2(delta)/dt2 at y, given ydot = dy/dt (from model_rhs): the tip's acceleration into
- * the surface (the start rule of a tip resting on it). */
-double model_delta_acceleration(const double *y, const double *ydot, const model_params *p);
+/* d2(delta)/dt2 of contact point k at y, given ydot = dy/dt (from model_rhs): its
+ * acceleration into the surface (the start rule of a point resting on it). */
+double model_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p);
 
 #ifdef __cplusplus
 }

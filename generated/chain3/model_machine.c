@@ -17,6 +17,10 @@
 
 #define RISING 1
 #define FALLING (-1)
+#define NCONTACT MODEL_NCONTACT
+#define TIP MODEL_TIP_POINT
+#define POINT_EVENTS MODEL_NTIP_EVENT  /* each point's events, in the tip's order */
+#define RECORD(m, k) (&(m)->point[k])  /* point k's machine (const as m is) */
 
 /* ---- the parameter table (codegen/parameters.py) ---- */
 static const char *const param_names[MODEL_NPARAM] = {
@@ -39,17 +43,8 @@ static const char *const param_names[MODEL_NPARAM] = {
     "mu",
     "eps",
     "E_star",
-    "R",
     "C_j",
-    "delta_c",
-    "P_c",
-    "B",
-    "inv_delta_c",
-    "theta_c",
-    "y_s",
-    "delta_m",
-    "delta_r",
-    "R_res"
+    "B"
 };
 static const char *const param_keys[MODEL_NPARAM] = {
     "chain.length[1]",
@@ -70,15 +65,6 @@ static const char *const param_keys[MODEL_NPARAM] = {
     "surface.height_initial",
     "contact.friction",
     "contact.friction_eps",
-    "",
-    "",
-    "",
-    "",
-    "",
-    "",
-    "",
-    "",
-    "",
     "",
     "",
     ""
@@ -103,17 +89,8 @@ static const char *const param_units[MODEL_NPARAM] = {
     "1",
     "m/s",
     "Pa",
-    "m",
     "1",
-    "m",
-    "N",
-    "1",
-    "1/m",
-    "1",
-    "m",
-    "m",
-    "m",
-    "m"
+    "1"
 };
 static const char *const param_docs[MODEL_NPARAM] = {
     "length of link 1, m",
@@ -135,20 +112,11 @@ static const char *const param_docs[MODEL_NPARAM] = {
     "friction coefficient",
     "regularization speed of the friction sign, m/s",
     "reduced modulus E* (Eq. 7), Pa",
-    "reduced tip radius (Eq. 8), m",
     "critical yield coefficient",
-    "critical deformation, m",
-    "critical load, N",
-    "Jackson-Green exponent 0.14 exp(23 S_y/E*)",
-    "1/delta_c (the elasto-plastic law multiplies by it), 1/m",
-    "pi a/R of the Jackson-Green law at delta = delta_c: pi (delta_c/R)^(1/2) 1.9^(-B/2)",
-    "surface level now (moves to where a resting tip lifts off), m",
-    "maximum compression of the current impact, m",
-    "permanent deformation (set at maximum compression), m",
-    "unloading radius (set at maximum compression), m"
+    "Jackson-Green exponent 0.14 exp(23 S_y/E*)"
 };
 static const int param_kinds[MODEL_NPARAM] = {
-0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2
+0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1
 };
 
 double *model_param_slot(model_params *p, int k)
@@ -173,17 +141,8 @@ double *model_param_slot(model_params *p, int k)
     case 16: return &p->mu;
     case 17: return &p->eps;
     case 18: return &p->E_star;
-    case 19: return &p->R;
-    case 20: return &p->C_j;
-    case 21: return &p->delta_c;
-    case 22: return &p->P_c;
-    case 23: return &p->B;
-    case 24: return &p->inv_delta_c;
-    case 25: return &p->theta_c;
-    case 26: return &p->y_s;
-    case 27: return &p->delta_m;
-    case 28: return &p->delta_r;
-    case 29: return &p->R_res;
+    case 19: return &p->C_j;
+    case 20: return &p->B;
     default: return NULL;
     }
 }
@@ -289,26 +248,17 @@ static int check_rules(const model_params *p, const char **range_text)
     return MODEL_PARAMS_OK;
 }
 
-/* The derived constants a force law divides by or multiplies with are finite and above 0:
- * not so for moduli beyond double precision's range (two of 1e300 Pa give delta_c = 0). */
-static int derived_in_range(const model_params *p)
+/* The derived contact constants of point k, of contact radius `radius`: those of the materials
+ * alone (E*, C_j, B) in p, those of its radius in p->point[k]. Returns whether the constants
+ * a force law divides by or multiplies with are finite and above 0: not so for moduli beyond
+ * double precision's range (two of 1e300 Pa give delta_c = 0). */
+static int derive_point(model_params *p, int k, double radius)
 {
-    return p->E_star > 0.0 && isfinite(p->E_star) &&
-           p->delta_c > 0.0 && isfinite(p->delta_c) &&
-           p->inv_delta_c > 0.0 && isfinite(p->inv_delta_c) &&
-           p->P_c > 0.0 && isfinite(p->P_c);
-}
-
-int model_derive(model_params *p, const char **range_text)
-{
-    int bad = model_check(p, range_text);
-    if (bad == MODEL_PARAMS_OK) bad = check_rules(p, range_text);
-    if (bad != MODEL_PARAMS_OK) return bad;
-    int in_range = 1;
+    model_point_contact *pc = &p->point[k];
     const double E_rod = p->E_rod;
     const double nu_rod = p->nu_rod;
     const double S_y_rod = p->S_y_rod;
-    const double R_tip = p->R_tip;
+    const double R_tip = radius;
     const double E_surface = p->E_surface;
     const double nu_surface = p->nu_surface;
     const double S_y_surface = p->S_y_surface;
@@ -323,17 +273,28 @@ int model_derive(model_params *p, const char **range_text)
     const double inv_delta_c = (1.0/delta_c);
     const double theta_c = 3.14159265358979323846*sqrt(delta_c)*exp(-1.0/2.0*B*log(19.0/10.0))/sqrt(R);
     p->E_star = E_star;
-    p->R = R;
-    p->C_j = C_j;
-    p->delta_c = delta_c;
-    p->P_c = P_c;
-    p->B = B;
-    p->inv_delta_c = inv_delta_c;
-    p->theta_c = theta_c;
+    pc->R = R;
     (void)S_y;
     (void)nu;
+    p->C_j = C_j;
+    pc->delta_c = delta_c;
+    pc->P_c = P_c;
+    p->B = B;
+    pc->inv_delta_c = inv_delta_c;
+    pc->theta_c = theta_c;
+    return p->E_star > 0.0 && isfinite(p->E_star) &&
+           pc->delta_c > 0.0 && isfinite(pc->delta_c) &&
+           pc->inv_delta_c > 0.0 && isfinite(pc->inv_delta_c) &&
+           pc->P_c > 0.0 && isfinite(pc->P_c);
+}
 
-    in_range &= derived_in_range(p);
+int model_derive(model_params *p, const char **range_text)
+{
+    int bad = model_check(p, range_text);
+    if (bad == MODEL_PARAMS_OK) bad = check_rules(p, range_text);
+    if (bad != MODEL_PARAMS_OK) return bad;
+    int in_range = 1;
+    in_range &= derive_point(p, TIP, p->R_tip);
     if (!in_range) {  /* named by the larger modulus */
         if (range_text) *range_text = "(the contact constants E*, delta_c and P_c it gives leave double precision's range)";
         return p->E_rod >= p->E_surface ? 7 : 11;
@@ -343,9 +304,9 @@ int model_derive(model_params *p, const char **range_text)
 
 /* ---- switch laws (MODEL section 4) ---- */
 /* Eq. 12: the permanent deformation left by a maximum compression delta_max. */
-static double residual_deformation(double delta_max, const model_params *p)
+static double residual_deformation(double delta_max, const model_point_contact *pc)
 {
-    const double delta_c = p->delta_c;
+    const double delta_c = pc->delta_c;
     return fmax(0, delta_max*(1 - 1/sqrt(0.8461538461538463 + 0.15384615384615385*delta_max/delta_c)));
 }
 
@@ -357,10 +318,10 @@ static double unloading_radius(double delta_max, double P_m, double delta_r, con
 }
 
 /* Reloading past delta_m returns to the elasto-plastic law once the yield onset was passed. */
-static int yielded(const model_params *p)
+static int yielded(const model_point_contact *pc)
 {
-    const double delta_m = p->delta_m;
-    const double delta_c = p->delta_c;
+    const double delta_m = pc->delta_m;
+    const double delta_c = pc->delta_c;
     return delta_m >= (19.0/10.0)*delta_c;
 }
 
@@ -399,30 +360,12 @@ static double chain_mass(const model_params *p)
     return p->m1 + p->m2 + p->m3;
 }
 
-/* ---- the contact points: the tip (point -1) and the joints (point k from 0) ---- */
-#define JOINTS 0
-#define POINT_EVENTS MODEL_NEVENT  /* each point's events, in the tip's order */
-/* a point's machine (const as m is) */
-#define RECORD(m, point) ((void)(point), &(m)->tip)
-
-/* A point's contact in the parameters, as the machine sets it: the tip's own fields (p->phase,
- * p->y_s, ...) or joint k's in p->joint[k], of the same names. */
-typedef struct {
-    int *phase;
-    double *y_s, *delta_m;
-    double *delta_r, *R_res;
-    double R;  /* its contact radius */
-} point_contact;
-
-#define CONTACT_OF(c) {&(c)->phase, &(c)->y_s, &(c)->delta_m, &(c)->delta_r, &(c)->R_res, (c)->R}
-
-static point_contact contact_of(model_params *p, int point)
+/* ---- the contact points: the joints with contact code (k from 0), then the tip (k = TIP) ---- */
+/* The first event of point k: the tip's first, then joint k's (as the model's events). */
+static int first_event(int k)
 {
-    (void)point;
-    const point_contact tip = CONTACT_OF(p);
-    return tip;
+    return k == TIP ? 0 : POINT_EVENTS * (k + 1);
 }
-#undef CONTACT_OF
 
 /* A point's outputs: the tip's (MODEL_OUT_delta, MODEL_OUT_v_Bx, ...) or joint k's
  * (MODEL_OUT_JOINT(k, MODEL_POINT_*)). */
@@ -430,28 +373,12 @@ typedef struct {
     double delta, delta_rate, v_x, v_y, F, F_f;
 } point_outputs;
 
-static point_outputs outputs_at(const double *out, int point)
+static point_outputs outputs_at(const double *out, int k)
 {
-    (void)point;
+    (void)k;
     const point_outputs tip = {out[MODEL_OUT_delta], out[MODEL_OUT_delta_rate], out[MODEL_OUT_v_Bx],
                                out[MODEL_OUT_v_By], out[MODEL_OUT_F], out[MODEL_OUT_F_f]};
     return tip;
-}
-
-/* The parameters as a point sees them: the tip's are p; joint k's, its contact state and the
- * constants of its radius in the tip's fields (model_joint_params), written to *buf. */
-static const model_params *as_seen(const model_params *p, int point, model_params *buf)
-{
-    (void)point;
-    (void)buf;
-    return p;
-}
-
-/* d2(delta)/dt2 of a point at y, given ydot = dy/dt. */
-static double delta_acceleration_at(int point, const double *y, const double *ydot, const model_params *p)
-{
-    (void)point;
-    return model_delta_acceleration(y, ydot, p);
 }
 
 /* Whether a point at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
@@ -463,9 +390,9 @@ static int pulled_in(const model_params *p, int point, double t, const double *y
     if (fabs(o.delta_rate) > MODEL_TANGENTIAL_TOLERANCE * (fabs(o.v_x) + fabs(o.v_y))) return 0;
     model_params free_flight = *p;
     double ydot[MODEL_NSTATE];
-    *contact_of(&free_flight, point).phase = MODEL_PHASE_FREE;
+    free_flight.point[point].phase = MODEL_PHASE_FREE;
     if (model_rhs(t, y, ydot, &free_flight) != 0) return 0;
-    return delta_acceleration_at(point, y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
+    return model_delta_acceleration(point, y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
 }
 
 /* The state scales of an impact at a point of contact radius R approaching at v_n with speed
@@ -500,7 +427,7 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
                           const double *out, int into_dent)
 {
     model_point_machine *r = RECORD(m, point);
-    const point_contact c = contact_of(p, point);
+    model_point_contact *c = &p->point[point];
     const point_outputs o = outputs_at(out, point);
     r->impacts += 1;
     r->t_prev_start = r->t_start;
@@ -509,30 +436,30 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
     r->t_end = NAN;
     if (!into_dent) {  /* a new impact on the undeformed surface (back into its own dent: its law kept) */
         r->delta_max = r->P_max = r->delta_r = 0.0;
-        r->R_res = c.R;
-        *c.delta_m = 0.0;
-        *c.delta_r = 0.0;
-        *c.R_res = c.R;
+        r->R_res = c->R;
+        c->delta_m = 0.0;
+        c->delta_r = 0.0;
+        c->R_res = c->R;
     }
-    impact_scales(p, c.R, o.v_x, o.v_y, fmax(o.delta_rate, 0.0), out[MODEL_OUT_T], y, r->scale);
+    impact_scales(p, c->R, o.v_x, o.v_y, fmax(o.delta_rate, 0.0), out[MODEL_OUT_T], y, r->scale);
 }
 
-/* Set a point free before its first contact, on the surface at the tip's level p->y_s. */
-static void starts_free(model_machine *m, model_params *p, int point)
+/* Set a point free before its first contact, on the surface at the level y_s. */
+static void starts_free(model_machine *m, model_params *p, int point, double y_s)
 {
     model_point_machine *r = RECORD(m, point);
-    const point_contact c = contact_of(p, point);
+    model_point_contact *c = &p->point[point];
     r->state = r->was = MODEL_MACHINE_FREE;
     r->t_start = r->t_end = r->t_prev_start = r->t_prev_end = NAN;
     r->slip = r->was_slip = 1.0;  /* free flight: no friction, whatever the state */
     r->stick_excess = -INFINITY;
-    r->R_res = c.R;
+    r->R_res = c->R;
     for (int i = 0; i < MODEL_NSTATE; ++i) r->scale[i] = 1.0;
-    *c.phase = MODEL_PHASE_FREE;
-    *c.y_s = p->y_s;
-    *c.delta_m = 0.0;
-    *c.delta_r = 0.0;
-    *c.R_res = c.R;
+    c->phase = MODEL_PHASE_FREE;
+    c->y_s = y_s;
+    c->delta_m = 0.0;
+    c->delta_r = 0.0;
+    c->R_res = c->R;
 }
 
 /* How a free point starts at (t, y), with the outputs `out`: touching and pressing in, or
@@ -549,7 +476,7 @@ static int starts_at(model_machine *m, model_params *p, int point, double t, con
     if (touching && (rate > 0.0 || (m->run_to_time && pulled_in(p, point, t, y, out)))) {
         impact_begins(m, p, point, t, y, out, 0);
         RECORD(m, point)->state = MODEL_MACHINE_ELASTIC;
-        *contact_of(p, point).phase = law_of(MODEL_MACHINE_ELASTIC);
+        p->point[point].phase = law_of(MODEL_MACHINE_ELASTIC);
         return MODEL_START_CONTACT;
     }
     if (!touching) return MODEL_START_FREE;
@@ -562,14 +489,14 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
     double out[MODEL_NOUT];
     memset(m, 0, sizeof *m);
     m->run_to_time = run_to_time;
-    p->y_s = p->surface_height;
+    double y_s = p->surface_height;
     if (p->surface_initial != 0.0) {  /* the surface is where the tip starts */
         model_outputs(t, y, out, p);
-        p->y_s = out[MODEL_OUT_y_B];
+        y_s = out[MODEL_OUT_y_B];
     }
-    for (int point = -1; point < JOINTS; ++point) starts_free(m, p, point);
+    for (int point = 0; point < NCONTACT; ++point) starts_free(m, p, point, y_s);
     model_outputs(t, y, out, p);
-    const int start = starts_at(m, p, -1, t, y, out);
+    const int start = starts_at(m, p, TIP, t, y, out);
     /* touching, not pressing in: no impact in a run to the first separation (a resting start
      * is MODEL_START_ALONG); a run to a time waits for one */
     return run_to_time && start != MODEL_START_CONTACT ? MODEL_START_FREE : start;
@@ -613,18 +540,23 @@ static int watch_state(int state, int base, int *events, int *directions)
 
 int model_machine_events(const model_machine *m, int *events, int *directions)
 {
-    int k = watch_state(m->tip.state, 0, events, directions);
+    const model_point_machine *tip = &m->point[TIP];
+    int k = watch_state(tip->state, 0, events, directions);
+    for (int j = 0; j < TIP; ++j) {  /* the joints' */
+        const int base = first_event(j);
+        k += watch_state(m->point[j].state, base, events + k, directions + k);
+    }
     return k;
 }
 #undef WATCH
 
 /* The machine state after `state` when the contact events in `has` fired. */
-static int next_state(int state, const int *has, const model_params *p)
+static int next_state(int state, const int *has, const model_point_contact *pc)
 {
-    (void)p;
+    (void)pc;
     switch (state) {
     case MODEL_MACHINE_FREE:  /* a new impact, or back into its own dent (delta_r), reloading */
-        return has[MODEL_EVENT_CONTACT] || !(p->delta_r > 0.0) ? MODEL_MACHINE_ELASTIC : MODEL_MACHINE_RELOADING;
+        return has[MODEL_EVENT_CONTACT] || !(pc->delta_r > 0.0) ? MODEL_MACHINE_ELASTIC : MODEL_MACHINE_RELOADING;
     case MODEL_MACHINE_ELASTIC:
     case MODEL_MACHINE_ELASTOPLASTIC:
         return has[MODEL_EVENT_MAX_COMPRESSION] ? MODEL_MACHINE_RESTITUTION : MODEL_MACHINE_ELASTOPLASTIC;
@@ -632,7 +564,7 @@ static int next_state(int state, const int *has, const model_params *p)
         return has[MODEL_EVENT_SEPARATION] ? MODEL_MACHINE_FREE : MODEL_MACHINE_RELOADING;
     case MODEL_MACHINE_RELOADING:  /* back past delta_m onto the curve it left, or unloading again */
         if (!has[MODEL_EVENT_PASSES_DELTA_M]) return MODEL_MACHINE_RESTITUTION;
-        return yielded(p) ? MODEL_MACHINE_ELASTOPLASTIC : MODEL_MACHINE_ELASTIC;
+        return yielded(pc) ? MODEL_MACHINE_ELASTOPLASTIC : MODEL_MACHINE_ELASTIC;
     default:  /* sustained: lift-off */
         return MODEL_MACHINE_FREE;
     }
@@ -644,24 +576,22 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
                         const double *y, const double *out)
 {
     model_point_machine *r = RECORD(m, point);
-    const point_contact c = contact_of(p, point);
+    model_point_contact *c = &p->point[point];
     const point_outputs o = outputs_at(out, point);
-    model_params seen;
-    const model_params *at = as_seen(p, point, &seen);
     const int state = r->state;
     int act = MODEL_ACT_RESTART;
-    int next = next_state(state, has, at);
+    int next = next_state(state, has, c);
     if (state == MODEL_MACHINE_FREE) {
         impact_begins(m, p, point, t, y, out, next == MODEL_MACHINE_RELOADING);
         act |= MODEL_ACT_IMPACT_BEGIN | MODEL_ACT_TOLERANCES;
     } else if (next == MODEL_MACHINE_RESTITUTION &&
                (state == MODEL_MACHINE_ELASTIC || state == MODEL_MACHINE_ELASTOPLASTIC)) {
         const double delta_max = o.delta, P_m = o.F;
-        const double delta_r = residual_deformation(delta_max, at);
-        const double R_res = unloading_radius(delta_max, P_m, delta_r, at);
-        *c.delta_r = delta_r;
-        *c.R_res = R_res;
-        *c.delta_m = delta_max;
+        const double delta_r = residual_deformation(delta_max, c);
+        const double R_res = unloading_radius(delta_max, P_m, delta_r, p);
+        c->delta_r = delta_r;
+        c->R_res = R_res;
+        c->delta_m = delta_max;
         r->delta_max = delta_max;
         r->P_max = P_m;
         r->delta_r = delta_r;
@@ -679,11 +609,11 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
         for (int i = 0; i < MODEL_NSTATE; ++i) r->scale[i] = 1.0;  /* no impact's scales */
         /* the tip's separation ends a run to separation;
          * else the surface is where a point left it after resting on it */
-        if (point < 0 && !m->run_to_time) act |= MODEL_ACT_END;
-        else if (state == MODEL_MACHINE_SUSTAINED) *c.y_s -= o.delta;
+        if (point == TIP && !m->run_to_time) act |= MODEL_ACT_END;
+        else if (state == MODEL_MACHINE_SUSTAINED) c->y_s -= o.delta;
     }
     r->state = next;
-    *c.phase = law_of(next);
+    c->phase = law_of(next);
     r->act = act;
     return act;
 }
@@ -693,11 +623,11 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
 {
     int events[MODEL_NEVENT], directions[MODEL_NEVENT];
     int has[MODEL_NEVENT] = {0};
-    int point_fired[1 + JOINTS] = {0};  /* [0] the tip, [k + 1] joint k */
+    int point_fired[NCONTACT] = {0};
     double out[MODEL_NOUT];
     const int watched = model_machine_events(m, events, directions);
     int act = 0;
-    for (int point = -1; point < JOINTS; ++point) {
+    for (int point = 0; point < NCONTACT; ++point) {
         model_point_machine *r = RECORD(m, point);
         r->act = 0;
         r->was = r->state;  /* what its record names as before the switch, whatever changes it */
@@ -708,11 +638,12 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
-        point_fired[events[k] / POINT_EVENTS] = 1;
+        const int block = events[k] / POINT_EVENTS;  /* 0: the tip's events, k + 1: joint k's */
+        point_fired[block == 0 ? TIP : block - 1] = 1;
     }
-    if (point_fired[0]) {  /* the tip, under the force laws that have been acting */
+    if (point_fired[TIP]) {  /* the tip, under the force laws that have been acting */
         model_outputs(t, y, out, p);
-        act |= point_switch(m, p, -1, has, t, y, out);
+        act |= point_switch(m, p, TIP, has, t, y, out);
     }
     return act;
 }
@@ -741,7 +672,7 @@ void model_machine_atol(const model_machine *m, const model_params *p, double rt
     const double energy = fmax(chain_mass(p) * fmax(p->g, 1.0) * chain_length(p), 1e-30);
     for (int i = 0; i < 6; ++i) atol_out[i] = atol;
     for (int i = 6; i < MODEL_NSTATE; ++i) atol_out[i] = atol * energy;
-    for (int point = -1; point < JOINTS; ++point) {
+    for (int point = 0; point < NCONTACT; ++point) {
         /* inside a point's impact: rtol times its scales, never looser than outside it */
         const model_point_machine *r = RECORD(m, point);
         if (r->state == MODEL_MACHINE_FREE) continue;
@@ -795,10 +726,10 @@ int model_machine_below(const model_params *p, const double *y, double *depth)
 int model_pruned_reach(const model_params *p, const double *y)
 {
     /* the surface below the pivot (at height 0): the scene's, or the tip's height in y (the
-     * heights are above p->y_s) */
+     * heights are above the tip's surface level) */
     double h[MODEL_NPOINT];
     model_heights(y, h, p);
-    const double tip = h[MODEL_NPOINT - 1] + p->y_s;
+    const double tip = h[MODEL_NPOINT - 1] + p->point[TIP].y_s;
     const double y_s = p->surface_initial != 0.0 ? tip : p->surface_height;
     const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, chain_length(p));
     double reach = 0.0;  /* joint j can reach the surface iff L1 + ... + Lj >= -y_s */

@@ -32,8 +32,8 @@
 extern "C" {
 #endif
 
-#define MODEL_API_VERSION 2
-#define MODEL_STRUCTURE_HASH "feee180d010a325f"
+#define MODEL_API_VERSION 3
+#define MODEL_STRUCTURE_HASH "9b1f4c43770a1daa"
 
 /* Thresholds of the machine (codegen/machine.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */
@@ -79,10 +79,10 @@ enum {
 };
 
 #define MODEL_PARAMS_OK (-1)
-#define MODEL_NPARAM 28
+#define MODEL_NPARAM 19
 
-/* A contact point's machine: the tip's (machine.tip) or a joint's (machine.joint[k]). Its force
- * law and the values fixed at its switches are in the parameters: the tip's own fields
+/* A contact point's machine, machine.point[k] (the joints', then the tip's at MODEL_TIP_POINT). Its
+ * force law and the values fixed at its switches are in the point's record params.point[k]
  * (phase, y_s, delta_m, delta_r, R_res). */
 typedef struct {
     int state;          /* MODEL_MACHINE_* */
@@ -106,7 +106,7 @@ typedef struct {
 typedef struct {
     int run_to_time;    /* 1: separation does not end the run; later impacts follow */
     double side[MODEL_NEVENT];   /* last nonzero side of each event function (0: none yet) */
-    model_point_machine tip;     /* the tip's contact */
+    model_point_machine point[1];  /* each contact point's: the joints' (model_joint_number), the tip's last */
 } model_machine;
 
 /* Parameters by index k < MODEL_NPARAM: the struct field, its scene key ("" when the

@@ -270,11 +270,12 @@ def rhs_pair(scene: Scene, phase: str, y: np.ndarray, delta_m: float) -> tuple[n
     P_m = ref.contact.normal_force("elastoplastic" if ref.contact.plastic else "elastic", delta_m)
     ref.contact.at_maximum_compression(delta_m, P_m)
     delta_r = residual_deformation(delta_m, consts.delta_c)
-    params.delta_m = delta_m
-    if "R_res" in model.param_names:
-        params.delta_r = delta_r
-        params.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
-    params.phase = PHASE_LAWS.index(phase)
+    tip = params.point[model.lib.MODEL_TIP_POINT]
+    tip.delta_m = delta_m
+    if "R_res" in dict(ffi.typeof("model_point_contact").fields):
+        tip.delta_r = delta_r
+        tip.R_res = unloading_radius(P_m, delta_m, delta_r, consts.E_star)
+    tip.phase = PHASE_LAWS.index(phase)
     names = ref.state_names  # y is laid out as the reference's state; the C model's may have more (each
     if len(y) != len(names):  # joint's own works), which start at 0 here and are not compared
         raise ValueError(f"the state has {len(y)} entries; the reference engine's has {len(names)}")

@@ -34,9 +34,7 @@ def model_spec(scene: Scene, solver: Solver | None = None) -> ModelSpec:
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
     joints = reachable_joints(scene)
-    # the analytic Jacobian is the tip's alone: a model with contact at the joints takes CVODE's
-    # difference quotients
-    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic" and not joints, sustained,
+    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained,
                      joints)
 
 

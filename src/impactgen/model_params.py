@@ -78,7 +78,6 @@ def params_at_start(model: CompiledModel, scene: Scene):
     params = fill_params(model, scene)
     y0 = ffi.new("double[]", list(scene.q0) + list(scene.u0) + [0.0] * (model.nstate - 2 * scene.n))
     model.lib.model_machine_start(ffi.new("model_machine *"), params, 0.0, y0, 1)
-    params.phase = model.lib.MODEL_PHASE_FREE
-    for k in range(len(model.spec.joints)):
-        params.joint[k].phase = model.lib.MODEL_PHASE_FREE
+    for point in params.point:
+        point.phase = model.lib.MODEL_PHASE_FREE
     return params

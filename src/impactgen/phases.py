@@ -51,7 +51,8 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
     start = session.begin(params, scene, solver)
-    state0 = m.tip.state
+    tip = m.point[lib.MODEL_TIP_POINT]
+    state0 = tip.state
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         first_row, tallied = session.without_run()
         session.close()
@@ -59,7 +60,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
                                    start == lib.MODEL_START_ALONG, started, tallied)
     in_contact = start == lib.MODEL_START_CONTACT
     joints_at_start = [model.lib.model_joint_number(k) for k in range(len(model.spec.joints))
-                       if m.joint[k].state != machine.free] if model.spec.joints else []
+                       if m.point[k].state != machine.free] if model.spec.joints else []
     ran = session.run(params, solver.t_max if solver.t_end is None else solver.t_end, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
     impacts = _impacts(machine, ran.segments, in_contact)
@@ -69,11 +70,11 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
                          key=lambda impact: (impact.t_start, point_number(impact.point, n)))
     status, message = _status(lib, solver, machine, ran, impacts)
 
-    trajectory = partial(_trajectory, ran, state0, m.tip.state, session.output_index, model.state_names)
+    trajectory = partial(_trajectory, ran, state0, tip.state, session.output_index, model.state_names)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
-        pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, m.tip.state), params, sampler)
+        pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, tip.state), params, sampler)
         if dense_output:
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
     counters = session.counters()
@@ -89,10 +90,9 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
 
 def _yield_scales(model: CompiledModel, params) -> dict[str, YieldScale]:
     """Each contact point's constants, as the C model derived them, for the warnings."""
-    scales = {"tip": YieldScale(params.R, params.delta_c, params.B)}
-    for k, joint in enumerate(model.spec.joints):
-        scales[point_name(joint, model.spec.links)] = YieldScale(params.joint[k].R, params.joint[k].delta_c, params.B)
-    return scales
+    numbers = (*model.spec.joints, model.spec.links)  # the records' order: the joints, then the tip
+    return {point_name(number, model.spec.links): YieldScale(point.R, point.delta_c, params.B)
+            for number, point in zip(numbers, params.point)}
 
 
 def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int],
@@ -176,7 +176,7 @@ def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: lis
     message = ran.message
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
-    return "failed", str(SolverError(message, STATES[machine.state.tip.state], ran.t_last))
+    return "failed", str(SolverError(message, STATES[machine.state.point[lib.MODEL_TIP_POINT].state], ran.t_last))
 
 
 def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, cuts: list[int],

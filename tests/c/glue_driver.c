@@ -23,15 +23,16 @@ static model_params paper_params(void)
     model_params p;
     memset(&p, 0, sizeof p);
     p.L1 = 1.0; p.L2 = 1.0; p.m1 = 1.0; p.m2 = 1.0; p.g = 9.81;
-    p.y_s = sin(-70.0 * 3.14159265358979323846 / 180.0) + sin(-60.0 * 3.14159265358979323846 / 180.0);
-    p.E_star = E_star; p.R = R; p.C_j = C_j;
-    p.delta_c = R * (p0 / E_star) * (p0 / E_star);
-    p.P_c = 4.0 / 3.0 * (R / E_star) * (R / E_star) * p0 * p0 * p0;
+    model_point_contact *tip = &p.point[MODEL_TIP_POINT];
+    tip->y_s = sin(-70.0 * 3.14159265358979323846 / 180.0) + sin(-60.0 * 3.14159265358979323846 / 180.0);
+    p.E_star = E_star; tip->R = R; p.C_j = C_j;
+    tip->delta_c = R * (p0 / E_star) * (p0 / E_star);
+    tip->P_c = 4.0 / 3.0 * (R / E_star) * (R / E_star) * p0 * p0 * p0;
     p.B = 0.14 * exp(23.0 * S_y / E_star);
-    p.inv_delta_c = 1.0 / p.delta_c;
-    p.theta_c = 3.14159265358979323846 * sqrt(p.delta_c / R) * exp(-p.B / 2.0 * log(1.9));
-    p.R_res = R; p.mu = 0.2; p.eps = 1e-6;
-    p.phase = MODEL_PHASE_ELASTIC;
+    tip->inv_delta_c = 1.0 / tip->delta_c;
+    tip->theta_c = 3.14159265358979323846 * sqrt(tip->delta_c / R) * exp(-p.B / 2.0 * log(1.9));
+    tip->R_res = R; p.mu = 0.2; p.eps = 1e-6;
+    tip->phase = MODEL_PHASE_ELASTIC;
     return p;
 }
 
@@ -100,7 +101,7 @@ int main(void)
     EXPECT(fills > 0, "buffer filled and continued");
     EXPECT(flag == IG_ROOT && roots[1] != 0, "yield root found");
     ig_outputs(&p, n, t_buf, y_buf, out);
-    EXPECT(fabs(out[(n - 1) * MODEL_NOUT + MODEL_OUT_delta] - 1.9 * p.delta_c) < 1e-12, "root at 1.9 delta_c");
+    EXPECT(fabs(out[(n - 1) * MODEL_NOUT + MODEL_OUT_delta] - 1.9 * p.point[MODEL_TIP_POINT].delta_c) < 1e-12, "root at 1.9 delta_c");
     ig_stats st;
     ig_solver_stats(s, &st);
     EXPECT(st.nsteps > 0 && st.nfev > 0, "statistics counted");
@@ -161,7 +162,7 @@ int main(void)
         EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 7, &n, segs, 1, &n_seg,
                       NULL) == IG_ERR_USAGE, "ig_run into full buffers refused (not a loop that never ends)");
         ig_outputs(&q, 1, &t, y, out);
-        ig_tally_begin(&tally, t, y, out, m.tip.impacts > 0);
+        ig_tally_begin(&tally, t, y, out, m.point[MODEL_TIP_POINT].impacts > 0);
         do {
             n = 0;  /* the buffers emptied before each call */
             flag = ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, every ? 7 : 1, &n,

@@ -102,8 +102,9 @@ class CompiledRhsModel(ReferenceModel):
 
     def rhs(self, t: float, y: np.ndarray, phase: str) -> np.ndarray:
         c, ffi = self.contact, self.compiled.ffi
-        self.params.phase = LAW_CODE[phase]
-        self.params.delta_m, self.params.delta_r, self.params.R_res = c.delta_m, c.delta_r, c.R_res
+        tip = self.params.point[self.compiled.lib.MODEL_TIP_POINT]
+        tip.phase = LAW_CODE[phase]
+        tip.delta_m, tip.delta_r, tip.R_res = c.delta_m, c.delta_r, c.R_res
         y = np.ascontiguousarray(y, dtype=float)
         self.compiled.lib.model_rhs(t, ffi.cast("double *", y.ctypes.data), self.ydot_c, self.params)
         return self.ydot.copy()

@@ -11,6 +11,7 @@ DROPPED = {"chain.links": LINKS, "chain.length": 0.2, "chain.mass": 0.2, "initia
            "initial.u": [0.0] * LINKS, "surface.height": -0.15, "solver.t_end": 1.0}
 REFERENCE_SPAN = {"quick": 0.21, "full": 0.3}  # s of the same motion the reference engine runs
 ROUNDS = {"quick": 2, "full": 3}
+METHODS = ("auto", "bdf")  # the falling-chain example under the default method and BDF (analytic Jacobian)
 
 
 def dropped_chain():
@@ -42,13 +43,21 @@ def points_benchmark(quick: bool) -> dict:
     c_span, c_short = _best(lambda: impactgen.simulate(span), ROUNDS[mode])
     ref_span, ref_short = _best(lambda: impactgen.simulate(span, engine="reference"), 1)
     summary = result.summary
+    example = impactgen.load_scene("falling-chain")
+    methods = {}
+    for method in METHODS:  # the shipped example, every point with the analytic Jacobian
+        impactgen.simulate(example, method=method, record_steps=False)  # build, outside the timing
+        seconds, run = _best(lambda: impactgen.simulate(example, method=method, record_steps=False), ROUNDS[mode])
+        methods[method] = {"wall_s": seconds, "status": run.status, "impacts": len(run.impacts),
+                           "nsteps": run.stats.get("nsteps"), "njev": run.stats.get("njev"),
+                           "nfev": run.stats.get("nfev")}
     return {
         "links": LINKS, "t_end": scene.solver.t_end, "status": result.status, "wall_s": wall,
         "impacts": summary["impacts"] + summary["joint_impacts"], "joint_impacts": summary["joint_impacts"],
         "residual_J": summary["energy"]["residual"],
         "span_s": REFERENCE_SPAN[mode], "c_span_s": c_span, "reference_span_s": ref_span,
         "c_span_impacts": len(c_short.impacts), "reference_span_impacts": len(ref_short.impacts),
-        "reference_status": ref_short.status,
+        "reference_status": ref_short.status, "falling_chain": methods,
     }
 
 
@@ -63,7 +72,13 @@ def points_targets(result: dict) -> list[dict]:
                           f"the joints), {result['impacts'] / result['wall_s']:.0f} impacts/s; its first "
                           f"{result['span_s']:g} s {ratio:.0f}x faster than the reference engine "
                           f"({result['c_span_s']:.3f} s against {result['reference_span_s']:.1f} s)"),
-             "verdict": "reported" if ok else f"failed: {result['status']}"}]
+             "verdict": "reported" if ok else f"failed: {result['status']}"}] + [
+        {"target": f"the falling-chain example (6 links, 1 s) with method {method!r} (reported; A/B in the closing "
+                   f"note of issue 44)",
+         "measured": (f"{run['wall_s']:.3f} s, {run['impacts']} impacts, {run['nsteps']} steps, {run['njev']} "
+                      f"Jacobians, {run['nfev']} right-hand sides"),
+         "verdict": "reported" if run["status"] == "ok" else f"failed: {run['status']}"}
+        for method, run in result.get("falling_chain", {}).items()]
 
 
 def points_report_lines(result: dict) -> list[str]:

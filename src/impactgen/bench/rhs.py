@@ -87,10 +87,13 @@ def rhs_benchmark(links: tuple[int, ...]) -> list[dict]:
         y, y_s = _state(scene)
         scene = dataclasses.replace(scene, surface_height=y_s)  # in contact on purpose: no start checks
         params = params_at_start(model, scene)
-        params.delta_m, params.delta_r, params.R_res = 2.0e-5, 5.0e-6, 0.0084  # a restitution state
-        params.phase = 2
-        params_source = " ".join(f"p.{name} = {getattr(params, name)!r};" for name in model.param_names)
-        c_ns = {f"c_{law}_ns": c_from_c(spec, params_source + f" p.phase = {code};", y)
+        tip = params.point[model.lib.MODEL_TIP_POINT]
+        tip.delta_m, tip.delta_r, tip.R_res = 2.0e-5, 5.0e-6, 0.0084  # a restitution state
+        tip.phase = 2
+        point_fields = [name for name, _ in model.ffi.typeof("model_point_contact").fields if name != "phase"]
+        params_source = " ".join([f"p.{name} = {getattr(params, name)!r};" for name in model.param_names]
+                                 + [f"p.point[MODEL_TIP_POINT].{name} = {getattr(tip, name)!r};" for name in point_fields])
+        c_ns = {f"c_{law}_ns": c_from_c(spec, params_source + f" p.point[MODEL_TIP_POINT].phase = {code};", y)
                 for code, law in enumerate(("free", "elastic", "elastoplastic", "restitution"))}
         ffi, lib = model.ffi, model.lib
         y_c, ydot_c = ffi.new("double[]", list(y)), ffi.new("double[]", len(y))

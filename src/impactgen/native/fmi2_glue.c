@@ -290,7 +290,7 @@ static double link_length(instance *c, int i)
 
 /* The start load_scene refuses (scene.py, _check_physics), by the same rule: a tip inside the
  * surface, or a pivot or joint below it, by more than the touch tolerance. Logs the variable
- * and the link and returns 1; 0 for a start on or above the surface. After prepare (p.y_s). */
+ * and the link and returns 1; 0 for a start on or above the surface. After prepare (p.point[MODEL_TIP_POINT].y_s). */
 static int start_below_surface(instance *c)
 {
     double length[MODEL_NQ] = {0}, height[MODEL_NQ + 1] = {0}, total = 0.0;
@@ -299,7 +299,7 @@ static int start_below_surface(instance *c)
         total += length[i];
         height[i + 1] = height[i] + length[i] * sin(c->q0[i]);
     }
-    const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, total), y_s = c->p.y_s, y_tip = height[MODEL_NQ];
+    const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, total), y_s = c->p.point[MODEL_TIP_POINT].y_s, y_tip = height[MODEL_NQ];
     if (y_s - y_tip > slack) {
         say(c, fmi2Error, "logStatusError", "surface.height: the tip of link %d starts %.3g m inside the "
             "surface (tip at y = %.6g m, surface at %.6g m); lower the surface or change initial.q",
@@ -323,7 +323,7 @@ static int start_below_surface(instance *c)
 /* A joint this model was pruned of (it could not reach the surface at the values the FMU was
  * built from) that could reach it with the values set now: the FMU has no contact law for it,
  * so it would pass through the surface unseen. Logs the joint and the values and returns 1;
- * 0 when the model fits the values. After prepare (p.y_s: the surface at the start). */
+ * 0 when the model fits the values. After prepare (p.point[MODEL_TIP_POINT].y_s: the surface at the start). */
 static int pruned_joint_reaches(instance *c)
 {
     const int joint = model_pruned_reach(&c->p, c->y);
@@ -337,7 +337,7 @@ static int pruned_joint_reaches(instance *c)
         "but this FMU has no contact at joint %d: it was built from values at which the joint cannot reach, and "
         "was pruned. %s = %.6g m reaches the surface %.6g m below the pivot (%s). Build the FMU from a scene "
         "with these values (impactgen fmu SCENE --set KEY=VALUE) to have joint %d's contact, or keep the "
-        "surface out of its reach", joint, joint, joint, lengths, reach, -c->p.y_s,
+        "surface out of its reach", joint, joint, joint, lengths, reach, -c->p.point[MODEL_TIP_POINT].y_s,
         c->p.surface_initial != 0.0 ? "at the tip's initial height: surface.height_initial, initial.q"
                                     : "surface.height", joint);
     return 1;
@@ -401,9 +401,9 @@ fmi2Status fmi2Reset(fmi2Component comp)
 static double machine_value(const instance *c, int kind, int point)
 {
 #ifdef MODEL_NJOINT
-    const model_point_machine *r = point > 0 ? &c->m.joint[point - 1] : &c->m.tip;
+    const model_point_machine *r = point > 0 ? &c->m.point[point - 1] : &c->m.point[MODEL_TIP_POINT];
 #else
-    const model_point_machine *r = &c->m.tip;
+    const model_point_machine *r = &c->m.point[MODEL_TIP_POINT];
     (void)point;
 #endif
     switch (kind) {
@@ -609,16 +609,16 @@ static int handle_events(instance *c, const int *fired_by_integrator)
         int events[MODEL_NEVENT], directions[MODEL_NEVENT], tip_fired = 0;
         const int watched = model_machine_events(&c->m, events, directions);
         for (int k = 0; k < watched; ++k) tip_fired |= flags[k] && events[k] < FMU_NTIP_EVENT;
-        const int before = c->m.tip.state;
+        const int before = c->m.point[MODEL_TIP_POINT].state;
         act = model_machine_switch(&c->m, &c->p, c->t, c->y, flags);
         if (act) {
             if (tip_fired) {
                 say(c, fmi2OK, "logEvents", "t = %.17g: %s -> %s", c->t, model_machine_state_name(before),
-                    model_machine_state_name(c->m.tip.state));
+                    model_machine_state_name(c->m.point[MODEL_TIP_POINT].state));
             }
 #ifdef MODEL_NJOINT
             for (int k = 0; k < MODEL_NJOINT; ++k) {  /* each joint that switched, by name */
-                const model_point_machine *j = &c->m.joint[k];
+                const model_point_machine *j = &c->m.point[k];
                 if (!j->act) continue;
                 say(c, fmi2OK, "logEvents", "t = %.17g: joint %d: %s -> %s", c->t, model_joint_number(k),
                     model_machine_state_name(j->was), model_machine_state_name(j->state));
@@ -736,7 +736,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t
     const int flag = model_rhs(c->t, c->y, derivatives, &c->p);
     if (flag != 0) {
         say(c, fmi2Error, "logStatusError", "the right-hand side is not finite at t = %g in phase %s%s", c->t,
-            model_machine_state_name(c->m.tip.state),
+            model_machine_state_name(c->m.point[MODEL_TIP_POINT].state),
             flag < 0 ? ": the mass matrix is not positive definite (check chain.mass and chain.length)" : "");
         return fmi2Error;
     }
@@ -868,7 +868,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     if (flag < 0) {
         c->mode = FAILED;
         say(c, fmi2Error, "logStatusError", "the integrator failed in phase %s near t = %g: %s",
-            model_machine_state_name(c->m.tip.state), c->t_int, ig_solver_message(c->solver));
+            model_machine_state_name(c->m.point[MODEL_TIP_POINT].state), c->t_int, ig_solver_message(c->solver));
         return fmi2Error;
     }
     if (c->t_int < target) {  /* the run ended before the communication point */

@@ -73,7 +73,7 @@ static int record_joints(const model_machine *m, const ig_segment *seg, ig_segme
                          const double *out_buf)
 {
     for (int k = 0; k < MODEL_NJOINT; ++k) {
-        const model_point_machine *j = &m->joint[k];
+        const model_point_machine *j = &m->point[k];
         if (!j->act) continue;
         if (*n_segments >= segment_capacity) return 1;
         ig_segment *rec = &segments[(*n_segments)++];
@@ -162,8 +162,9 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         ig_segment *seg = &segments[(*n_segments)++];
         seg->t = *t;
         seg->sample = *n_written - 1;
-        seg->state = m->tip.state;
-        seg->slip = m->tip.slip;
+        const model_point_machine *tip = &m->point[MODEL_TIP_POINT];
+        seg->state = tip->state;
+        seg->slip = tip->slip;
         seg->params = *p;
         seg->event = -1;
         seg->act = 0;
@@ -173,7 +174,7 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
             }
             seg->act = model_machine_switch(m, p, *t, y, roots_found);
         }
-        record_after(seg, &m->tip);  /* the machine after the switch (as it was, at t_stop) */
+        record_after(seg, tip);  /* the machine after the switch (as it was, at t_stop) */
         seg->point = MODEL_NQ;
         if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
 #ifdef MODEL_NJOINT
@@ -205,7 +206,7 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
     ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
 #ifdef MODEL_NJOINT
     for (int k = 0; k < MODEL_NJOINT; ++k) {  /* the joints in contact from the start */
-        if (m->joint[k].state == MODEL_MACHINE_FREE) continue;
+        if (m->point[k].state == MODEL_MACHINE_FREE) continue;
         tally->joint_impacts++;
         if (tally->first_point == 0) tally->first_point = model_joint_number(k);
     }
