@@ -102,9 +102,9 @@ def test_stick_slip_rules(paper_scene):
     assert ("slip_stops", 1) in probe.watched("elastic", slip=-1.0)
     assert {("slip_backward", -1), ("slip_forward", -1)} <= set(probe.watched("elastic", slip=0.0))
     # leaving a stick: by the side of the cone reached, the contact phase unchanged
-    assert probe.after("elastic", ["slip_backward"], slip=0.0) == "elastic" and probe.m.tip.slip == -1.0
-    assert probe.after("elastic", ["slip_forward"], slip=0.0) == "elastic" and probe.m.tip.slip == +1.0
-    assert probe.params.slip == probe.m.tip.slip
+    assert probe.after("elastic", ["slip_backward"], slip=0.0) == "elastic" and probe.tip.slip == -1.0
+    assert probe.after("elastic", ["slip_forward"], slip=0.0) == "elastic" and probe.tip.slip == +1.0
+    assert probe.record.slip == probe.tip.slip
 
 
 def test_a_bad_input_is_named_by_its_scene_key(paper_scene):
@@ -122,12 +122,12 @@ def test_a_bad_input_is_named_by_its_scene_key(paper_scene):
 def test_free_flight_and_impact_tolerances(paper_scene):
     probe = Probe(paper_scene)
     atol = probe.ffi.new("double[8]")  # q, u, the works, the impulses
-    probe.m.tip.state = probe.lib.MODEL_MACHINE_FREE
+    probe.tip.state = probe.lib.MODEL_MACHINE_FREE
     probe.lib.model_machine_atol(probe.m, probe.params, 1e-8, 1e-12, atol)
     assert list(atol)[:4] == [1e-12] * 4 and atol[4] > 1e-12  # the works: times a typical energy
     probe.lib.model_machine_start(probe.m, probe.params, 0.0, probe.y, 1)
-    probe.m.tip.state = probe.lib.MODEL_MACHINE_ELASTIC
-    probe.m.tip.scale[0] = probe.m.tip.scale[1] = 1e-8
+    probe.tip.state = probe.lib.MODEL_MACHINE_ELASTIC
+    probe.tip.scale[0] = probe.tip.scale[1] = 1e-8
     probe.lib.model_machine_atol(probe.m, probe.params, 1e-8, 1e-12, atol)
     assert atol[0] == pytest.approx(1e-15)  # floored at the double precision of a tip height
     assert np.all(np.array(list(atol)) <= np.array([1e-12] * 4 + [np.inf] * 4))

@@ -177,7 +177,10 @@ def test_a_run_whose_energy_budget_does_not_close_says_so():
         missed += abs(e["residual"]) > 0.01 * s["T0"]
     assert missed >= 1
     loose = {"solver.rtol": 1e-8, "solver.atol": 1e-10, "contact.friction": 2.0, "contact.friction_eps": 1e-11}
-    tight = {**loose, "solver.rtol": 1e-10, "solver.atol": 1e-12}
+    # tolerances that resolve the 1e-11 m/s friction layer: at rtol 1e-10 BDF's budget turns on the
+    # last bits (1.4e-8 of T0 in 500209 steps before the contact points were unified, 1.1e-5 in 655
+    # steps after; 5.7e-6 and 1.3e-7 at rtol 1.1e-10), at 1e-11 both close it to 5e-9
+    tight = {**loose, "solver.rtol": 1e-11, "solver.atol": 1e-13}
     assert not any("energy budget" in w
                    for w in impactgen.simulate(impactgen.load_scene(PAPER, overrides=tight), method="bdf").warnings)
     # the reference engine's runs are checked the same way, from its summary

@@ -51,7 +51,7 @@ static ig_solver *paper_run(int method, model_params *q, model_machine *m, doubl
 {
     char err[256];
     *q = paper_params();
-    q->surface_height = q->y_s;
+    q->surface_height = q->point[MODEL_TIP_POINT].y_s;
     initial_state(y);
     model_machine_start(m, q, 0.0, y, 0);
     const int analytic = IG_METHOD_USES_JACOBIAN(method) ? MODEL_HAS_JACOBIAN : 0;

@@ -6,6 +6,7 @@ import dataclasses
 import math
 from typing import Any, Mapping
 
+from ..codegen.parameters import RULES
 from ..errors import SceneError
 from .loading import scene_from_dict
 from .model import Scene, Solver
@@ -20,7 +21,7 @@ _JOINT_RADIUS = "contact.joint_radius"  # a per-joint list: its elements are set
 _MATERIALS = {"E", "nu", "yield_strength"}  # the keys of a [rod] or [surface] Material
 # The keys `check_physics` reads: a case that changes none of them (a speed, a friction
 # coefficient, a solver setting) keeps the base scene's verdict, which was already checked.
-_CROSS_CHECKED = {"rod.E", "rod.yield_strength", "surface.E", "surface.yield_strength", "surface.height",
+_CROSS_CHECKED = {*(key for rule in RULES for key in (rule.key, rule.above_key)), "surface.height",
                   "chain.length", "initial.q", "initial.q_deg"}
 
 
