@@ -60,3 +60,9 @@ def paper_scene():
 def paper_result(paper_scene):
     import impactgen
     return impactgen.simulate(paper_scene)
+
+
+def pytest_collection_modifyitems(items):
+    """Tests marked `first` (minutes in a subprocess of their own) go to the front, so that a
+    worker runs them beside the others rather than alone at the end of the session."""
+    items.sort(key=lambda item: item.get_closest_marker("first") is None)  # stable: else as collected

@@ -52,7 +52,9 @@ def _sanitize_command() -> dict:
             "timeout": 900, "env": {**os.environ, "PYTHON": sys.executable}}
 
 
-# about a minute of compiling and running under the sanitizers, in a cache and a folder of its own
+# about a minute of compiling and running under the sanitizers, in a cache and a folder of its own:
+# first, so that it runs beside the other tests
+@pytest.mark.first
 @pytest.mark.skipif(SANITIZED or not _asan_available(),
                     reason="already under the sanitizers, or no AddressSanitizer runtime")
 def test_glue_and_simulations_are_clean_under_sanitizers():
