@@ -144,6 +144,27 @@ def test_committed_generated_code_is_up_to_date(folder):
         assert (where / name).read_text() == text, f"regenerate {where} (see generated/README.md)"
 
 
+def _jacobian_and_differences(model, y: np.ndarray, p, columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """The model's analytic Jacobian at y, and central differences of its right-hand side in
+    the first `columns` states (the rest left 0)."""
+    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.links
+    J = ffi.new("double[]", N * N)
+    assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
+    fd = np.zeros((N, N))
+    for j in range(columns):
+        # small steps: the penetration is only ~1e-5 m, and moves by L h per step in q
+        h = 1e-9 if j < n else (1e-8 if j < 2 * n else 1e-3)
+        out = []
+        for sign in (1, -1):
+            yy = y.copy()
+            yy[j] += sign * h
+            f = ffi.new("double[]", N)
+            assert lib.model_rhs(0.0, ffi.new("double[]", list(yy)), f, p) == 0
+            out.append(np.array(list(f)))
+        fd[:, j] = (out[0] - out[1]) / (2 * h)
+    return np.array(list(J)).reshape(N, N), fd
+
+
 @pytest.mark.parametrize("spec", [ModelSpec(1, jacobian=True), ModelSpec(2, jacobian=True),
                                   ModelSpec(4, "three-phase", "none", True), ModelSpec(3, "hertz", "regularized", True)],
                          ids=lambda s: s.slug)
@@ -174,21 +195,7 @@ def test_analytic_jacobian_matches_central_differences(spec):
             y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
             y_B = sum(values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n))
             tip.y_s = y_B + 1.2e-5  # inside the contact, clear of every law's kinks
-            J = ffi.new("double[]", N * N)
-            assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
-            J = np.array(list(J)).reshape(N, N)
-            fd = np.zeros((N, N))
-            for j in range(N):
-                # small steps: the penetration is only ~1e-5 m, and moves by L h per step in q
-                h = 1e-9 if j < n else (1e-8 if j < 2 * n else 1e-3)
-                out = []
-                for sign in (1, -1):
-                    yy = y.copy()
-                    yy[j] += sign * h
-                    f = ffi.new("double[]", N)
-                    assert lib.model_rhs(0.0, ffi.new("double[]", list(yy)), f, p) == 0
-                    out.append(np.array(list(f)))
-                fd[:, j] = (out[0] - out[1]) / (2 * h)
+            J, fd = _jacobian_and_differences(model, y, p, N)
             scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
             assert np.all(np.abs(J - fd) <= 1e-5 * scale + 1e-9), phase
 
@@ -242,20 +249,7 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
             point.phase, point.y_s = phase, heights[number - 1] + 1.1e-5
             for name in own:
                 setattr(point, name, law[name])
-        J = ffi.new("double[]", N * N)
-        assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
-        J = np.array(list(J)).reshape(N, N)
-        fd = np.zeros((N, N))
-        for j in range(2 * n):
-            h = 1e-9 if j < n else 1e-8
-            out = []
-            for sign in (1, -1):
-                yy = y.copy()
-                yy[j] += sign * h
-                f = ffi.new("double[]", N)
-                assert lib.model_rhs(0.0, ffi.new("double[]", list(yy)), f, p) == 0
-                out.append(np.array(list(f)))
-            fd[:, j] = (out[0] - out[1]) / (2 * h)
+        J, fd = _jacobian_and_differences(model, y, p, 2 * n)
         scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
         assert np.abs(fd[n:2 * n]).max() > 1e3  # the contact forces dominate the accelerations
         assert np.all(np.abs(J - fd)[:, :2 * n] <= 1e-5 * scale + 1e-9), phase

@@ -287,6 +287,20 @@ static inline void kane_of(const double *y, const double *trig, const model_para
     (void)y; (void)trig; (void)p;
 }
 
+/* The motion and forces of every point in contact (kin[k], pf[k]; pf[k] zero for a point in free
+ * flight, kin[k] left as it was), each one's J^T (F_f, F) added to f. */
+static inline void add_contact_forces(const double *y, const double *trig, const model_params *p,
+                                      point_motion *kin, point_forces *pf, double *f)
+{
+    for (int k = 0; k < NCONTACT; ++k) {
+        pf[k] = NO_FORCES;
+        if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
+        motion_of_point(k, y, trig, p, &kin[k]);
+        forces_at(&kin[k], &p->point[k], p, &pf[k]);
+        for (int i = 0; i < 2; ++i) f[i] += kin[k].Jx[i] * pf[k].F_f + kin[k].Jy[i] * pf[k].F;
+    }
+}
+
 /* du/dt from Kane's equations M du/dt = f + sum over the points in contact of J^T (F_f, F). */
 static int accelerations(const double *y, const double *trig, const model_params *p, double *udot,
                          contact_forces *c)
@@ -295,14 +309,7 @@ static int accelerations(const double *y, const double *trig, const model_params
     double f[2];
     kane_of(y, trig, p, M, f);
     point_motion kin[NCONTACT];  /* (read only for the points in contact) */
-    for (int k = 0; k < NCONTACT; ++k) {
-        c->point[k] = NO_FORCES;
-        if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
-        motion_of_point(k, y, trig, p, &kin[k]);
-        forces_at(&kin[k], &p->point[k], p, &c->point[k]);
-        const point_forces *pf = &c->point[k];
-        for (int i = 0; i < 2; ++i) f[i] += kin[k].Jx[i] * pf->F_f + kin[k].Jy[i] * pf->F;
-    }
+    add_contact_forces(y, trig, p, kin, c->point, f);
     double dinv[2];
     if (ldl_factor(M, dinv)) return -1;
     ldl_solve(M, dinv, f);
@@ -520,12 +527,7 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
     point_forces pf[NCONTACT];
     memset(kin, 0, sizeof kin);  /* (read only for the points in contact) */
     memset(pf, 0, sizeof pf);
-    for (int k = 0; k < NCONTACT; ++k) {
-        if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
-        motion_of_point(k, y, trig, p, &kin[k]);
-        forces_at(&kin[k], &p->point[k], p, &pf[k]);
-        for (int i = 0; i < 2; ++i) f[i] += kin[k].Jx[i] * pf[k].F_f + kin[k].Jy[i] * pf[k].F;
-    }
+    add_contact_forces(y, trig, p, kin, pf, f);
     double dinv[2];
     if (ldl_factor(M, dinv)) return -1;
     ldl_solve(M, dinv, f);
