@@ -17,10 +17,11 @@ demo: $(STAMP)
 	$(VENV)/bin/python scripts/paper_table.py
 
 # the tests on every core (pytest-xdist), a test file's tests in one worker so that the file's
-# fixtures (FMUs, cross-checks) are built once; make test WORKERS=0 runs them in one process
+# fixtures (FMUs, cross-checks) are built once, the files in the collection's order (the tests
+# marked first lead it: see tests/conftest.py); make test WORKERS=0 runs them in one process
 WORKERS ?= auto
 test: $(STAMP)
-	$(VENV)/bin/python -m pytest -q -n $(WORKERS) --dist loadscope
+	$(VENV)/bin/python -m pytest -q -n $(WORKERS) --dist loadscope --no-loadscope-reorder
 
 # SUNDIALS 7 from Debian unstable, unpacked in a temporary folder (docs/safety.md)
 check-sundials7: $(STAMP)
