@@ -158,9 +158,9 @@ static double normal_force_slope(double delta, const model_point_contact *pc, co
     }
 }
 
-/* ---- the contact points: the joints with contact code (k from 0), then the tip (k = 0) ---- */
-#define NCONTACT 1
-#define TIP_POINT 0
+/* ---- the contact points: the joints with contact code (k from 0), then the tip (k = TIP_POINT) ---- */
+#define NCONTACT MODEL_NCONTACT
+#define TIP_POINT MODEL_TIP_POINT
 
 /* The force law point k is under. */
 static inline int point_phase(const model_params *p, int k)

@@ -349,6 +349,13 @@ static int first_event(int k)
     return k == TIP ? 0 : POINT_EVENTS * (k + 1);
 }
 
+/* The point whose events event e is one of: first_event's inverse. */
+static int point_of_event(int e)
+{
+    const int block = e / POINT_EVENTS;  /* 0: the tip's events, k + 1: joint k's */
+    return block == 0 ? TIP : block - 1;
+}
+
 /* A point's outputs: the tip's (MODEL_OUT_delta, MODEL_OUT_v_Bx, ...) or joint k's
  * (MODEL_OUT_JOINT(k, MODEL_POINT_*)). */
 typedef struct {
@@ -620,8 +627,7 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
-        const int block = events[k] / POINT_EVENTS;  /* 0: the tip's events, k + 1: joint k's */
-        point_fired[block == 0 ? TIP : block - 1] = 1;
+        point_fired[point_of_event(events[k])] = 1;
     }
     if (point_fired[TIP]) {  /* the tip, under the force laws that have been acting */
         model_outputs(t, y, out, p);
