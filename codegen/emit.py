@@ -7,8 +7,9 @@ computed once per call and named `sin_q1`, `cos_q1`, ... as in the equations.
 """
 from __future__ import annotations
 
-import importlib.resources
 import dataclasses
+import importlib.resources
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -112,8 +113,7 @@ class GeneratedModel:
     prefix: str
     header: str  # model.h
     source: str  # model.c
-    machine_header: str  # model_machine.h
-    machine_source: str  # model_machine.c
+    params_source: str  # model_params.c
     cdef: str  # declarations for cffi
     state_names: tuple[str, ...]
     output_names: tuple[str, ...]
@@ -125,8 +125,7 @@ class GeneratedModel:
     def files(self) -> dict[str, str]:
         """File name -> text of every emitted source."""
         p = self.prefix
-        return {f"{p}.h": self.header, f"{p}.c": self.source,
-                f"{p}_machine.h": self.machine_header, f"{p}_machine.c": self.machine_source}
+        return {f"{p}.h": self.header, f"{p}.c": self.source, f"{p}_params.c": self.params_source}
 
 
 def _c_string(text: str) -> str:
@@ -218,6 +217,8 @@ class EmitContext:
     cdef: bool = False  # rendering declarations for cffi (no string or float #defines)
     net: dict | None = None  # the floor net's heights and the start rule's normal acceleration
     joints: dict | None = None  # contact at the joints: motion kernels, friction, events, outputs
+    point_fields: tuple[str, ...] = ()  # each contact point's outputs (MODEL_POINT_*)
+    contact_points: tuple[dict, ...] = ()  # name, radius parameter and output indices of each point
 
     @property
     def PREFIX(self) -> str:  # noqa: N802 (the C macros' spelling)
@@ -309,10 +310,11 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     params = model.params
     joints = _joints(model) if model.joints else None
     present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
+    outputs = [(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else [])
     return EmitContext(
         prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
         params=model.params, point_params=model.point_params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
-        outputs=[(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else []),
+        outputs=outputs,
         kane=_kernel(model, [kane]), friction=friction, constrained=spec.constrained,
         event_forces=event_forces, point_events=point_events, points=points,
         outputs_kernel=_kernel(model, [out_tip, energies]), out_tip=out_tip, energies=energies,
@@ -324,6 +326,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         param_names=[f.name for f in params],
         net=_net(model, t),
         joints=joints,
+        point_fields=tuple(o for o, _ in POINT_OUTPUTS),
+        contact_points=_contact_points(model, [name for name, _ in outputs]),
     )
 
 
@@ -342,6 +346,27 @@ def _joints(model: ModelExpressions) -> dict:
             "outputs": [(f"{o}_J{j}", f"joint {j}: {doc}") for j in spec.joints for o, doc in POINT_OUTPUTS],
             "point_fields": [o for o, _ in POINT_OUTPUTS],
             "output_names": {f"{o}_J{j}" for j in spec.joints for o, _ in POINT_OUTPUTS}}
+
+
+# The tip's outputs of the fields of POINT_OUTPUTS (a joint's are named <field>_J<joint>).
+TIP_OUTPUTS = ("delta", "delta_rate", "v_Bx", "v_By", "F", "F_f")
+
+
+def _contact_points(model: ModelExpressions, output_names: list[str]) -> tuple[dict, ...]:
+    """Each contact point in the order of params.point[k] (the joints, then the tip): its name,
+    the parameter of its contact radius, and where each of its POINT_OUTPUTS sits among the
+    outputs (-1: not computed, the friction force of a model without friction)."""
+    n = model.spec.links
+    points = []
+    for pm in model.points:
+        if pm.number == n:
+            name, radius, names = "tip", "R_tip", TIP_OUTPUTS
+        else:
+            name, radius = f"joint {pm.number}", f"R_joint{pm.number}"
+            names = tuple(f"{o}_J{pm.number}" for o, _ in POINT_OUTPUTS)
+        points.append({"name": name, "radius": radius,
+                       "outputs": [output_names.index(o) if o in output_names else -1 for o in names]})
+    return tuple(points)
 
 
 def _net(model: ModelExpressions, t) -> dict:
@@ -371,15 +396,13 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
     context = _context(model, prefix)
     ctx = context.mapping()
     env = _templates()
-    machine_decls = env.get_template("machine_decls.j2").render(context.mapping(cdef=True))
     return GeneratedModel(
         spec=spec,
         prefix=prefix,
         header=_tidy(env.get_template("model.h.j2").render(ctx)),
         source=_tidy(env.get_template("model.c.j2").render(ctx)),
-        machine_header=_tidy(env.get_template("machine.h.j2").render(ctx)),
-        machine_source=_tidy(env.get_template("machine.c.j2").render(ctx)),
-        cdef=_tidy(env.get_template("cdef.h.j2").render(ctx) + "\n" + machine_decls),
+        params_source=_tidy(env.get_template("model_params.c.j2").render(ctx)),
+        cdef=_tidy(env.get_template("cdef.h.j2").render(context.mapping(cdef=True))),
         state_names=model.state_names,
         output_names=tuple(name for name, _ in context.outputs),
         event_names=tuple(e.name for e in model.events) + tuple(
@@ -399,10 +422,31 @@ def generate_scene_header(gen: GeneratedModel, scene) -> str:
     return _tidy(_templates().get_template("scene.h.j2").render(ctx))
 
 
+# The runtime's phase machine, written once for every model, and the root rule it includes.
+MACHINE_FILES = ("model_machine.h", "model_machine.c", "roots.h")
+
+
+def machine_files(prefix: str) -> dict[str, str]:
+    """The runtime's phase machine for a model of this prefix: model_machine.h and .c with
+    every model_ and MODEL_ name given the prefix (named <prefix>_machine.h and .c), and
+    roots.h as it is, so that a folder of generated C builds on its own."""
+    native = importlib.resources.files("impactgen") / "native"
+    files = {}
+    for name in MACHINE_FILES:
+        text = (native / name).read_text(encoding="utf-8")
+        if name.startswith("model_"):
+            text = re.sub(r"\bmodel_", f"{prefix}_", text)
+            text = re.sub(r"\bMODEL_", f"{prefix.upper()}_", text)
+            text = text.replace('#include "model.h"', f'#include "{prefix}.h"')
+            name = name.replace("model_", f"{prefix}_", 1)
+        files[name] = text
+    return files
+
+
 def driver_files(gen: GeneratedModel, scene) -> dict[str, str]:
     """File name -> text of a folder a C driver builds from: the model, its phase machine and
     `<prefix>_scene.h` with the scene's numbers (what `impactgen generate` writes)."""
-    return {**gen.files(), f"{gen.prefix}_scene.h": generate_scene_header(gen, scene)}
+    return {**gen.files(), **machine_files(gen.prefix), f"{gen.prefix}_scene.h": generate_scene_header(gen, scene)}
 
 
 __all__ = ["GeneratedModel", "generate_model", "ccode", "ModelCPrinter"]

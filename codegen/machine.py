@@ -1,11 +1,13 @@
-"""Stage 5b of the pipeline: what the C phase machine is printed from.
+"""Stage 5b of the pipeline: what the model gives the phase machine.
 
 The phase machine of MODEL section 4 (which force law and which events with directions in
-each machine state, what is recorded at each switch) is C, generated beside the model from
-templates/machine.c.j2. Its switch laws (Eq. 12, the unloading radius, the yield onset) and
-the derived material constants come from the sympy expressions of contact.py, as the force
-laws do; its thresholds are named in thresholds.py and printed as #defines, so Python code
-that needs one (scene checks, validity warnings) reads the same number.
+each machine state, what is recorded at each switch) is plain C written once,
+src/impactgen/native/model_machine.c, compiled with each model. What it reads of a model is
+printed into the model's <prefix>_params.c (templates/model_params.c.j2): the switch laws
+(Eq. 12, the unloading radius, the yield onset) and the derived material constants from the
+sympy expressions of contact.py, as the force laws are; the thresholds, named in
+thresholds.py, are printed as #defines, so Python code that needs one (scene checks,
+validity warnings) reads the same number.
 """
 from __future__ import annotations
 
@@ -20,7 +22,11 @@ from .expressions import ModelExpressions
 from .spec import STATES
 from .thresholds import THRESHOLD, THRESHOLDS  # noqa: F401 (the machine prints them)
 
-API_VERSION = 3  # the C API of model.h and model_machine.h: bumped when a signature or a struct changes (2: m.tip; 3: every contact point's record in params.point[k] and machine.point[k], the tip's at MODEL_TIP_POINT)
+# The C API of model.h and model_machine.h: bumped when a signature or a struct changes (2: m.tip;
+# 3: every contact point's record in params.point[k] and machine.point[k], the tip's at
+# MODEL_TIP_POINT; 4: the machine is the runtime's model_machine.c, the parameter table and the
+# switch laws the model's model_params.c)
+API_VERSION = 4
 
 
 @dataclass(frozen=True)

@@ -60,7 +60,7 @@ for name, text in fmu_sources(scene, "both").files.items():
 PY
 SAN="-std=c99 -Wall -Wextra -Werror -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined"
 "$CC" $SAN -I"$work/driver_model" -Isrc/impactgen/native examples/c/impact_driver.c "$work/driver_model/model.c" \
-    "$work/driver_model/model_machine.c" $glue_sources \
+    "$work/driver_model/model_params.c" $glue_sources \
     $sundials -lm -o "$work/impact_driver"
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 "$work/impact_driver" > /dev/null
 "$CC" $SAN -DFMU_MODEL_EXCHANGE -DFMU_CO_SIMULATION -I"$work/fmu" "$work"/fmu/*.c tests/c/fmu_driver.c \

@@ -139,3 +139,43 @@ def test_the_embedding_guide_lists_the_parameter_table():
     text = (Path(__file__).resolve().parents[1] / "docs" / "embedding.md").read_text()
     shown = text.split("<!-- parameters:begin -->\n")[1].split("\n<!-- parameters:end -->")[0]
     assert shown == markdown_table(), "regenerate the table in docs/embedding.md from codegen/parameters.py"
+
+
+@pytest.mark.parametrize("q_deg, height, expected", [
+    ((-70.0, -60.0), None, -1),          # the paper's start: the tip on the surface
+    ((-70.0, -60.0), -1.81, -1),         # the tip above it
+    ((-70.0, -60.0), -1.8, 2),           # the tip 6 mm inside the surface
+    ((-30.0, -90.0), -0.49, 1),          # joint 1 below the surface, the tip above it
+    ((-30.0, 80.0), None, 0),            # surface "initial": the tip high, the pivot under it
+    ((20.0, 0.0), -0.1, -1),             # every point above the surface
+    ((-70.0, -60.0), 0.2, 0),            # the pivot under the surface
+])
+def test_the_c_start_check_refuses_what_the_scene_check_refuses(paper_scene, q_deg, height, expected):
+    """model_machine_start_inside (what the FMU and the C driver run) names the same first
+    point inside the surface as the scene's own check refuses."""
+    from impactgen.errors import SceneError
+    from impactgen.scene.physics import check_physics
+    try:
+        check_physics(paper_scene.replace({"initial.q_deg": list(q_deg),
+                                           "surface.height": "initial" if height is None else height}))
+        refused = False
+    except SceneError:
+        refused = True
+    assert refused == (expected >= 0)
+    probe = Probe(paper_scene)
+    lib, ffi = probe.lib, probe.ffi
+    params = params_at_start(probe.model, paper_scene)
+    params.surface_initial = 1.0 if height is None else 0.0
+    params.surface_height = 0.0 if height is None else height
+    y = ffi.new("double[]", [math.radians(q) for q in q_deg] + [0.0] * (probe.model.nstate - 2))
+    depth = ffi.new("double *")
+    assert lib.model_machine_start_inside(params, y, depth) == expected
+    assert (depth[0] > 0.0) == (expected >= 0)
+
+
+def test_slip_names(paper_scene):
+    lib = Probe(paper_scene, ModelSpec(2, "three-phase", "coulomb")).lib
+    names = {s: lib.model_machine_slip_name(lib.MODEL_MACHINE_ELASTIC, s) for s in (1.0, -1.0, 0.0)}
+    from cffi import FFI
+    assert {s: FFI().string(n).decode() for s, n in names.items()} == {1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
+    assert FFI().string(lib.model_machine_slip_name(lib.MODEL_MACHINE_FREE, 0.0)).decode() == ""

@@ -78,6 +78,17 @@ typedef struct {
     double delta_r;  /* permanent deformation (set at maximum compression), m */
     double R_res;  /* unloading radius (set at maximum compression), m */
 } model_point_contact;
+/* A contact point's quantities among the outputs: model_point_output(k, field) is the index in
+ * model_outputs' output of field MODEL_POINT_* of point k. */
+enum {
+    MODEL_POINT_DELTA = 0,
+    MODEL_POINT_DELTA_RATE = 1,
+    MODEL_POINT_V_X = 2,
+    MODEL_POINT_V_Y = 3,
+    MODEL_POINT_F = 4,
+    MODEL_POINT_F_F = 5,
+    MODEL_NPOINT_OUT = 6
+};
 
 /* Runtime parameters: one build serves every value of these. */
 typedef struct {
@@ -123,6 +134,72 @@ void model_tip_works(const double *y, double *W_normal, double *W_friction);
 /* d2(delta)/dt2 of contact point k at y, given ydot = dy/dt (from model_rhs): its
  * acceleration into the surface (the start rule of a point resting on it). */
 double model_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p);
+
+/* ---- what the phase machine (model_machine.h) reads of this model: model_params.c ---- */
+#define MODEL_PLASTIC 1  /* the three-phase law: yield, permanent deformation, reloading */
+#define MODEL_HAS_FRICTION 1
+#define MODEL_COULOMB 0  /* exact Coulomb friction: a stick-slip state per point */
+#define MODEL_FROZEN 0  /* friction keeps its direction from contact start */
+#define MODEL_SUSTAINED 0  /* the sustained-contact phase */
+#define MODEL_CONSTRAINED 0  /* some phase holds a point's velocity */
+#define MODEL_API_VERSION 4
+#define MODEL_STRUCTURE_HASH "bf65edb302b0dcfc"
+
+/* Thresholds of the machine (codegen/thresholds.py). */
+#define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */
+#define MODEL_TANGENTIAL_TOLERANCE 1e-12  /* d(delta)/dt or v_Bx below this fraction of the tip speed is rounding: zero */
+#define MODEL_STOPPED_TOLERANCE 1e-09  /* a slipping tip whose v_Bx has fallen below this fraction of its speed has stopped */
+#define MODEL_CHATTER_RATIO 2.0  /* impacts chatter when a flight is shorter than this many contact times */
+#define MODEL_ANGLE_RESOLUTION 0.01  /* inside an impact the angles are resolved to this fraction of the expected penetration (over the chain's length) */
+#define MODEL_STICK_EXCESS 1e-06  /* a stuck tip whose |F_f| exceeds mu F by this fraction of the largest F missed a slip event (judged at the end of each segment from every step: the machine's observer) */
+#define MODEL_YIELD_ONSET 1.9  /* the Hertz law (phase I) holds up to this many critical deformations delta_c; the Jackson-Green law (phase II, Eq. 10) beyond */
+#define MODEL_FLOOR_DEPTH 0.01  /* a joint or the tip found deeper than this fraction of the chain's shortest link below the surface, after any step, ends the run as failed (the floor net) */
+#define MODEL_HOLD_REGULARIZATION 1e-12  /* the constraint forces of several held points (stuck, resting) are solved with this fraction of the largest diagonal entry added to the diagonal: dependent rows (both ends of a link lying flat, stuck) then share the force instead of making the system singular */
+#define MODEL_ANGLE_ATOL_FLOOR 1e-15  /* absolute tolerance floor of an angle, rad: the double precision of a tip height ~1 m */
+#define MODEL_QUADRATURE_ATOL 1e+300  /* absolute tolerance of the impulses, N s: they are quadratures of the contact forces that feed nothing back, so, as CVODES leaves quadratures out of its error test by default, they do not set the step (finite: CVODE's error weights must be positive) */
+#define MODEL_PARAMS_OK (-1)
+#define MODEL_NPARAM 21
+
+/* Parameters by index k < MODEL_NPARAM: the struct field, its scene key ("" when the
+ * model derives or the machine sets it), unit and description. */
+double *model_param_slot(model_params *p, int k);
+const char *model_param_name(int k);
+const char *model_param_key(int k);
+const char *model_param_unit(int k);
+const char *model_param_doc(int k);
+/* 0: set by the scene (an input), 1: derived from the inputs, 2: set by the machine. */
+int model_param_kind(int k);
+
+/* Check the inputs against their physical ranges: MODEL_PARAMS_OK, or the index k of the
+ * first one out of range, with its range in *range_text (model_param_key(k) names it). */
+int model_check(const model_params *p, const char **range_text);
+/* Check the inputs, then fill the derived contact constants (E*, R, C_j, delta_c, P_c, B, and
+ * the elasto-plastic law's 1/delta_c and theta_c) of every contact point from the materials
+ * and its radius. Returns as model_check. */
+int model_derive(model_params *p, const char **range_text);
+/* Eq. 12: the permanent deformation left by a maximum compression delta_max. */
+double model_residual_deformation(double delta_max, const model_point_contact *pc);
+/* The unloading radius that makes the restitution force (Eq. 11) equal P_m at delta_max. */
+double model_unloading_radius(double delta_max, double P_m, double delta_r, const model_params *p);
+/* Whether reloading past delta_m returns to the elasto-plastic law (the yield onset was passed). */
+int model_yielded(const model_point_contact *pc);
+/* The force law (MODEL_PHASE_*) of a machine state (MODEL_MACHINE_*, machine.h). */
+int model_phase_of(int state);
+/* The index in model_outputs' output of field MODEL_POINT_* of contact point k (-1: none). */
+int model_point_output(int k, int field);
+/* The chain's length, mass and shortest link. */
+double model_chain_length(const model_params *p);
+double model_chain_mass(const model_params *p);
+double model_shortest_link(const model_params *p);
+/* Pruning. The joints this model has no contact code for, as unable to reach the surface at
+ * the scene's values: 1, 2.
+ * model_pruned_reach gives the first of them that could reach it with the values in p
+ * and the initial angles in y: joint j can iff L1 + ... + Lj >= -y_s (the pivot at height 0;
+ * y_s = surface_height, or the tip's height at y when surface_initial is set); 0 when none
+ * can: this model fits the values. A nonzero answer means the model would miss that joint's
+ * contact: generate the model again from a scene with these values (embedders refuse them,
+ * as the FMU does). */
+int model_pruned_reach(const model_params *p, const double *y);
 
 #ifdef __cplusplus
 }

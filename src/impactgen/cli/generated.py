@@ -151,7 +151,8 @@ def generate(scene, out: Path, prefix: str, write_scene: bool = False, force: bo
     compiled = compile_model(spec)
     elapsed = time.perf_counter() - started
     _write_generated(out, files)
-    print(f"{spec.slug}: {', '.join(str(out / name) for name in gen.files())} "
+    sources = [name for name in files if name.endswith(".c")]
+    print(f"{spec.slug}: {', '.join(str(out / name) for name in sources)} "
           f"(plain C99: the model and its phase machine; link with -lm), and the scene's values "
           f"in {out / (prefix + '_scene.h')}")
     if write_scene:

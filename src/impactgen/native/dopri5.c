@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "dopri5.h"
+#include "roots.h"
 
 #define SAFE 0.9          /* safety factor of the step-size controller */
 #define FAC_MIN 0.2       /* the step shrinks at most 5x ... */
@@ -63,11 +64,6 @@ static inline double smaller(double a, double b)
 static inline double larger(double a, double b)
 {
     return a > b ? a : b;
-}
-
-static double sign_of(double v)
-{
-    return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
 }
 
 /* Hairer's starting step: from the sizes of y0, f(y0) and an estimate of the second derivative
@@ -166,7 +162,7 @@ int ig_dopri5_start(ig_dopri5 *r, double t0, const double *y0, double t_stop, do
     watched(r, t0, r->y, r->g);
     int at_zero = 0;
     for (int k = 0; k < nevents; ++k) {
-        r->side[k] = sign_of(r->g[k]);
+        r->side[k] = ig_side_of(r->g[k]);
         at_zero |= r->side[k] == 0.0;
     }
     if (at_zero) {  /* an event function starting at 0: its side is where it goes (as CVODE decides) */
@@ -174,7 +170,7 @@ int ig_dopri5_start(ig_dopri5 *r, double t0, const double *y0, double t_stop, do
         for (int i = 0; i < n; ++i) r->tmp[i] = r->y[i] + dt * r->k[0][i];
         watched(r, t0 + dt, r->tmp, r->g_hi);
         for (int k = 0; k < nevents; ++k) {
-            if (r->side[k] == 0.0) r->side[k] = sign_of(r->g_hi[k]);
+            if (r->side[k] == 0.0) r->side[k] = ig_side_of(r->g_hi[k]);
         }
     }
     /* the polynomial of a zero-length step: constant y (for an interpolation before any step) */
@@ -304,15 +300,6 @@ void ig_dopri5_taylor(ig_dopri5 *r, double *rows)
     }
 }
 
-/* Watched event k crossed in its direction between the stored side and the value g
- * (an exact 0 counts as crossed). */
-static int crossed(const ig_dopri5 *r, int k, double g)
-{
-    const double side = r->side[k];
-    if (side == 0.0 || sign_of(g) == side) return 0;
-    return r->directions[k] == 0 || r->directions[k] == -side;
-}
-
 /* The first time in [t_lo, t_hi] where event k reaches the crossed side (Illinois on the
  * continuous extension of the last step): the right end of a bracket narrower than tol.
  * Uses r->ymid and r->g_hi (free while locate runs). */
@@ -326,7 +313,7 @@ static double locate(ig_dopri5 *r, int k, double t_lo, double g_lo, double t_hi,
         if (!(t_mid > t_lo + tol / 2 && t_mid < t_hi - tol / 2)) t_mid = 0.5 * (t_lo + t_hi);
         ig_dopri5_interpolate(r, t_mid, y);
         watched(r, t_mid, y, g);
-        if (sign_of(g[k]) == side) {  /* still on the old side */
+        if (ig_side_of(g[k]) == side) {  /* still on the old side */
             t_lo = t_mid;
             g_lo = g[k];
             if (kept == 1) g_hi *= 0.5;
@@ -368,7 +355,7 @@ static void first_root(ig_dopri5 *r, double t_lo, double t_hi, int *roots_found,
         const double end = first;
         const int before = located;
         for (int k = 0; k < nevents; ++k) {
-            if (t_root[k] < INFINITY || !crossed(r, k, g_end_now[k])) continue;
+            if (t_root[k] < INFINITY || !ig_crossed(r->side[k], g_end_now[k], r->directions[k])) continue;
             const double lo = g_lo[k] != 0.0 ? g_lo[k] : r->side[k] * DBL_MIN;  /* the old side's value */
             t_root[k] = locate(r, k, t_lo, lo, end, g_end_now[k], tol);
             first = smaller(first, t_root[k]);
@@ -459,14 +446,14 @@ int ig_dopri5_step(ig_dopri5 *r, int *roots_found)
             watched(r, t_hi, r->ymid, g_hi);
         }
         int any = 0;
-        for (int k = 0; k < r->nevents; ++k) any |= crossed(r, k, g_hi[k]);
+        for (int k = 0; k < r->nevents; ++k) any |= ig_crossed(r->side[k], g_hi[k], r->directions[k]);
         if (any) {
             first_root(r, t_lo, t_hi, roots_found, tol);
             r->started = 0;  /* the segment ends at the root (dopri5.h) */
             return IG_DOPRI5_ROOT;
         }
         for (int k = 0; k < r->nevents; ++k) {
-            if (g_hi[k] != 0.0) r->side[k] = sign_of(g_hi[k]);
+            r->side[k] = ig_side_after(r->side[k], g_hi[k]);
         }
         memcpy(g_lo, g_hi, event_bytes);
         t_lo = t_hi;

@@ -168,11 +168,13 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         seg->params = *p;
         seg->event = -1;
         seg->act = 0;
+        int act = 0;  /* what the switch did to the run: the end, new tolerances */
         if (flag == IG_ROOT) {
             for (int k = 0; k < s->nevents && seg->event < 0; ++k) {
                 if (roots_found[k]) seg->event = s->events[k];
             }
-            seg->act = model_machine_switch(m, p, *t, y, roots_found);
+            act = model_machine_switch(m, p, *t, y, roots_found);
+            seg->act = tip->act | (act & MODEL_ACT_END);  /* the tip's own switch */
         }
         record_after(seg, tip);  /* the machine after the switch (as it was, at t_stop) */
         seg->point = MODEL_NQ;
@@ -185,7 +187,6 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
         }
 #endif
         if (flag == IG_REACHED_END) return IG_REACHED_END;
-        const int act = seg->act;
         if (act & MODEL_ACT_END) return IG_RUN_DONE;
         if (act & MODEL_ACT_TOLERANCES) {
             model_machine_atol(m, p, s->rtol, atol, atol_now);
