@@ -1,7 +1,7 @@
 """Build an FMI 2.0 FMU (Model Exchange, Co-Simulation or both) of a scene.
 
 The FMU holds the generated model and phase machine, the scene's start values, the variable
-table, the FMI glue written once (native/fmi2_glue.c) and, for Co-Simulation, the CVODE glue
+table, the FMI interface written once (native/fmi2/fmu_*.c) and, for Co-Simulation, the CVODE glue
 with SUNDIALS linked statically. Only the fmi2* functions are exported. The sources and a
 buildDescription.xml travel inside, so the FMU can be rebuilt on another platform.
 """
@@ -32,7 +32,10 @@ from ..scene import Scene
 from ..sundials import find_sundials
 from .variables import KINDS, UNITS, Variable, variables
 
-FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")  # vendored, as published
+# the FMI interface written once for every model (native/fmi2/; fmu_instance.h says which file does what)
+FMU_FILES = ("fmu_instance.h", "fmu_api.c", "fmu_start.c", "fmu_variables.c", "fmu_events.c",
+             "fmu_model_exchange.c", "fmu_cosimulation.c")
 KINDS_OF_FMU = ("me", "cs", "both")
 DEFAULT_STOP_TIME = 0.5  # s, the default experiment of a scene that stops at separation
 EXPORTS = "{ global: fmi2*; local: *; };\n"  # linker version script: only the FMI functions
@@ -89,12 +92,13 @@ def fmu_sources(scene: Scene, kind: str = "both") -> FmuSources:
     digest = hashlib.sha256(json.dumps(facts, sort_keys=True).encode()).hexdigest()
     guid = "{" + f"{digest[:8]}-{digest[8:12]}-{digest[12:16]}-{digest[16:20]}-{digest[20:32]}" + "}"
     env = _templates()
+    lengths = {f.name: k for k, f in enumerate(model.params)}
     context = {"prefix": gen.prefix, "PREFIX": gen.prefix.upper(), "guid": guid, "model_name": scene.name,
-               "variables": variables_, "kinds": KINDS}
+               "variables": variables_, "kinds": KINDS,
+               "link_lengths": [lengths[f"L{i}"] for i in range(1, spec.links + 1)]}
     sources = driver_files(gen, scene)
     sources[f"{gen.prefix}_fmu.h"] = _tidy(env.get_template("fmu.h.j2").render(context))
-    sources["fmi2_glue.c"] = _native("fmi2_glue.c")
-    for name in FMI_HEADERS:
+    for name in FMI_HEADERS + FMU_FILES:
         sources[name] = (importlib.resources.files("impactgen") / "native" / "fmi2" / name).read_text(encoding="utf-8")
     if cs:
         for name in GLUE_FILES:

@@ -18,7 +18,7 @@ from ..codegen.emit import POINT_OUTPUTS
 from ..codegen.expressions import ModelExpressions
 from ..codegen.parameters import Field
 
-# kinds the C glue reads and writes (fmi2_glue.c: enum var_kind)
+# kinds the C glue reads and writes (native/fmi2: enum var_kind in model_fmu.h)
 KINDS = ("param", "q0", "u0", "state", "der", "output", "phase", "impacts", "delta_max", "delta_r", "P_max")
 
 
