@@ -1,8 +1,9 @@
 /*
  * fmu_driver.c: drive the FMI 2.0 glue directly, as an importer would, under the sanitizers
  * (scripts/sanitize.sh): Model Exchange with a fixed-step Euler loop that leaves the events
- * to fmi2CompletedIntegratorStep, Co-Simulation with two interleaved instances, a reset, and
- * bad input (a non-physical parameter, a wrong value reference, a call out of order).
+ * to fmi2CompletedIntegratorStep (the values read follow each new state and time),
+ * Co-Simulation with two interleaved instances, a reset, and bad input (a non-physical
+ * parameter, a wrong value reference, a call out of order).
  * Prints "fmu ok (N failures)" and returns the count of failures.
  */
 #include <math.h>
@@ -37,6 +38,32 @@ static int vr_of(const char *name)
 
 static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
 
+static double real(fmi2Component c, const char *name)
+{
+    const fmi2ValueReference vr = (fmi2ValueReference)vr_of(name);
+    double value = NAN;
+    CHECK(fmi2GetReal(c, &vr, 1, &value) == fmi2OK);
+    return value;
+}
+
+/* The values an importer reads are those of the state and time it set last, however often
+ * it reads them (the FMU computes them once per change). */
+static void values_follow_the_state(fmi2Component c, double *x, size_t nx, double t)
+{
+    char der_q[32], u[32];
+    snprintf(der_q, sizeof der_q, "der(q[%d])", MODEL_NQ);
+    snprintf(u, sizeof u, "u[%d]", MODEL_NQ);
+    CHECK(real(c, der_q) == x[2 * MODEL_NQ - 1] && real(c, der_q) == real(c, u));
+    const double T = real(c, "T"), kept = x[2 * MODEL_NQ - 1];
+    x[2 * MODEL_NQ - 1] = 2.0 * kept + 1.0;  /* the last link turns faster */
+    CHECK(fmi2SetContinuousStates(c, x, nx) == fmi2OK);
+    CHECK(real(c, der_q) == x[2 * MODEL_NQ - 1] && real(c, "T") != T);
+    x[2 * MODEL_NQ - 1] = kept;
+    CHECK(fmi2SetContinuousStates(c, x, nx) == fmi2OK);
+    CHECK(real(c, der_q) == kept && real(c, "T") == T);
+    CHECK(fmi2SetTime(c, t) == fmi2OK);
+}
+
 static void model_exchange(void)
 {
     fmi2Component c = fmi2Instantiate("me", fmi2ModelExchange, FMU_GUID, "", &callbacks, fmi2False, fmi2True);
@@ -52,6 +79,7 @@ static void model_exchange(void)
     const size_t nx = MODEL_NSTATE, nz = MODEL_NEVENT;
     CHECK(fmi2GetContinuousStates(c, x, nx) == fmi2OK);
     CHECK(fmi2GetNominalsOfContinuousStates(c, nominal, nx) == fmi2OK);
+    values_follow_the_state(c, x, nx, 0.0);
     const double h = 1e-7;
     int events = 0;
     for (double t = 0.0; t < 1e-3; t += h) {

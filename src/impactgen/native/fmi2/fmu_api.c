@@ -185,8 +185,9 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
     fmu_instance *c = (fmu_instance *)comp;
     if (!fmu_allowed(c, CALL_EXIT_INITIALIZATION)) return fmi2Error;
-    const int bad = fmu_prepare(c);
-    if (bad != MODEL_PARAMS_OK) return fmu_refuse_input(c, bad);
+    const char *range = "";
+    const int bad = fmu_prepare(c, &range);
+    if (bad != MODEL_PARAMS_OK) return fmu_refuse_input(c, bad, range);
     if (fmu_check_start(c) != fmi2OK) return fmi2Error;
     c->nominals_changed = 0;
 #ifdef FMU_CO_SIMULATION

@@ -91,10 +91,11 @@ int fmu_null_array(const fmu_instance *c, const char *function, size_t n, const 
 void fmu_set_start_values(fmu_instance *c);
 /* The start state, the derived parameters and the machine at the start, once per change of
  * the start values. Returns MODEL_PARAMS_OK, or the index of the first input out of its
- * physical range (fmu_refuse_input logs it). */
-int fmu_prepare(fmu_instance *c);
-/* Refuse input k (fmu_prepare's answer), naming its key and range: FAILED, fmi2Error. */
-fmi2Status fmu_refuse_input(fmu_instance *c, int k);
+ * physical range (or breaking a rule across inputs: model_derive), with the range or rule
+ * in *range (fmu_refuse_input logs it). */
+int fmu_prepare(fmu_instance *c, const char **range);
+/* Refuse input k with its range (fmu_prepare's answer), naming its key: FAILED, fmi2Error. */
+fmi2Status fmu_refuse_input(fmu_instance *c, int k, const char *range);
 /* The start values changed (a parameter, a start value, the start time). */
 void fmu_start_changed(fmu_instance *c);
 /* The checks that refuse a start the model does not hold (a point inside the surface, a

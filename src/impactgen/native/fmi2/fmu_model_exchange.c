@@ -119,8 +119,9 @@ fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_
 static fmi2Status ready(fmu_instance *c)
 {
     if (c->mode != INITIALIZATION) return fmi2OK;
-    const int bad = fmu_prepare(c);
-    return bad == MODEL_PARAMS_OK ? fmi2OK : fmu_refuse_input(c, bad);
+    const char *range = "";
+    const int bad = fmu_prepare(c, &range);
+    return bad == MODEL_PARAMS_OK ? fmi2OK : fmu_refuse_input(c, bad, range);
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t nx)

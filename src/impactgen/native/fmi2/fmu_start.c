@@ -39,8 +39,9 @@ void fmu_start_changed(fmu_instance *c)
     fmu_invalidate(c);
 }
 
-int fmu_prepare(fmu_instance *c)
+int fmu_prepare(fmu_instance *c, const char **range)
 {
+    *range = "";
     if (c->start_ready) return MODEL_PARAMS_OK;
     for (int i = 0; i < MODEL_NQ; ++i) {
         c->y[i] = c->q0[i];
@@ -48,8 +49,7 @@ int fmu_prepare(fmu_instance *c)
     }
     for (int k = 2 * MODEL_NQ; k < MODEL_NSTATE; ++k) c->y[k] = 0.0;
     fmu_invalidate(c);
-    const char *range = "";
-    const int bad = model_derive(&c->p, &range);
+    const int bad = model_derive(&c->p, range);
     if (bad != MODEL_PARAMS_OK) return bad;
     model_machine_start(&c->m, &c->p, c->t, c->y, 1);
     double ev[MODEL_NEVENT];
@@ -59,10 +59,8 @@ int fmu_prepare(fmu_instance *c)
     return MODEL_PARAMS_OK;
 }
 
-fmi2Status fmu_refuse_input(fmu_instance *c, int k)
+fmi2Status fmu_refuse_input(fmu_instance *c, int k, const char *range)
 {
-    const char *range = "";
-    model_check(&c->p, &range);
     char what[256];
     snprintf(what, sizeof what, "%s = %g is outside its physical range %s", model_param_key(k),
              *model_param_slot(&c->p, k), range);

@@ -84,7 +84,10 @@ static double real_value(fmu_instance *c, const fmu_variable *v)
     default: break;
     }
     /* before initialization ends: the state and outputs the start values give */
-    if ((c->mode == INSTANTIATED || c->mode == INITIALIZATION) && fmu_prepare(c) != MODEL_PARAMS_OK) return NAN;
+    const char *range = "";
+    if ((c->mode == INSTANTIATED || c->mode == INITIALIZATION) && fmu_prepare(c, &range) != MODEL_PARAMS_OK) {
+        return NAN;
+    }
     int flag = 0;
     switch (v->kind) {
     case VAR_STATE: return c->y[v->index];
