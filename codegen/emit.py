@@ -423,13 +423,13 @@ def generate_scene_header(gen: GeneratedModel, scene) -> str:
 
 
 # The runtime's phase machine, written once for every model, and the root rule it includes.
-MACHINE_FILES = ("model_machine.h", "model_machine.c", "roots.h")
+MACHINE_FILES = ("model_machine.h", "model_machine_points.h", "model_machine.c", "model_stick_slip.c", "roots.h")
 
 
 def machine_files(prefix: str) -> dict[str, str]:
-    """The runtime's phase machine for a model of this prefix: model_machine.h and .c with
-    every model_ and MODEL_ name given the prefix (named <prefix>_machine.h and .c), and
-    roots.h as it is, so that a folder of generated C builds on its own."""
+    """The runtime's phase machine for a model of this prefix: its files with every model_ and
+    MODEL_ name given the prefix (<prefix>_machine.h, <prefix>_machine.c, ...), and roots.h as
+    it is, so that a folder of generated C builds on its own."""
     native = importlib.resources.files("impactgen") / "native"
     files = {}
     for name in MACHINE_FILES:
