@@ -28,22 +28,7 @@
 #define RISING 1
 #define FALLING (-1)
 #define TIP MODEL_TIP_POINT
-#define POINT_EVENTS MODEL_NTIP_EVENT  /* each point's events, in the tip's order */
-
-/* ---- the contact points: the joints with contact code (k from 0), then the tip (k = TIP) ---- */
-/* The first event of point k in model_events' output: the tip's block first, then joint k's. */
-static int first_event(int k)
-{
-    return k == TIP ? 0 : POINT_EVENTS * (k + 1);
-}
-
-/* The point whose events event e is one of: first_event's inverse. */
-static int point_of_event(int e)
-{
-    const int block = e / POINT_EVENTS;  /* 0: the tip's events, k + 1: joint k's */
-    return block == 0 ? TIP : block - 1;
-}
-
+#define POINT_EVENTS MODEL_NTIP_EVENT  /* each point's events, in the order of the tip's MODEL_EVENT_* */
 
 /* Whether a point at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
  * the free chain pulls it into the surface (d2(delta)/dt2 beyond rounding of g): a resting or
@@ -256,7 +241,7 @@ int model_machine_events(const model_machine *m, int *events, int *directions)
     int k = 0;
     for (int point = 0; point < MODEL_NCONTACT; ++point) {
         const model_point_machine *r = &m->point[point];
-        const int base = first_event(point);
+        const int base = model_first_event(point);
         k += watch_state(r->state, base, events + k, directions + k);
 #if MODEL_COULOMB
         if (r->state != MODEL_MACHINE_FREE) k += watch_slip(r->slip, base, events + k, directions + k);
@@ -404,13 +389,13 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
-        point_fired[point_of_event(events[k])] = 1;
+        point_fired[model_event_point(events[k])] = 1;
     }
     /* point after point, each under the force laws the points before it switched to */
     int act = 0, separated = 0, touching = 0;
     for (int point = 0; point < MODEL_NCONTACT; ++point) {
         if (!point_fired[point]) continue;
-        const int point_act = point_switch(m, p, point, has + first_event(point), t, y);
+        const int point_act = point_switch(m, p, point, has + model_first_event(point), t, y);
         act |= point_act & (MODEL_ACT_RESTART | MODEL_ACT_TOLERANCES);
         if (point_act & MODEL_ACT_IMPACT_END) separated = 1;
     }
@@ -480,16 +465,6 @@ const char *model_machine_state_name(int state)
     return state >= 0 && state < (int)(sizeof names / sizeof names[0]) ? names[state] : "unknown";
 }
 
-/* The chain's point (model_heights' order, from 1) that contact point k is. */
-static int chain_point(int k)
-{
-#ifdef MODEL_NJOINT
-    if (k != TIP) return model_joint_number(k);
-#endif
-    (void)k;
-    return MODEL_NQ;
-}
-
 int model_machine_below(const model_params *p, const double *y, double *depth)
 {
     double h[MODEL_NPOINT];
@@ -497,7 +472,7 @@ int model_machine_below(const model_params *p, const double *y, double *depth)
     model_heights(y, h, p);
     /* a point with contact is measured from its own surface level (where it last lifted off
      * from rest, as the tip's y_s) */
-    for (int k = 0; k < MODEL_NCONTACT; ++k) h[chain_point(k) - 1] += p->point[TIP].y_s - p->point[k].y_s;
+    for (int k = 0; k < MODEL_NCONTACT; ++k) h[model_point_number(k) - 1] += p->point[TIP].y_s - p->point[k].y_s;
     for (int k = 0; k < MODEL_NPOINT; ++k) {
         if (h[k] < -MODEL_FLOOR_DEPTH * shortest) {
             *depth = -h[k];
