@@ -218,7 +218,8 @@ class EmitContext:
     net: dict | None = None  # the floor net's heights and the start rule's normal acceleration
     joints: dict | None = None  # contact at the joints: motion kernels, friction, events, outputs
     point_fields: tuple[str, ...] = ()  # each contact point's outputs (MODEL_POINT_*)
-    contact_points: tuple[dict, ...] = ()  # name, radius parameter and output indices of each point
+    contact_points: tuple[dict, ...] = ()  # name, number, radius parameter, first event and outputs of each point
+    event_points: tuple[int, ...] = ()  # the point (params.point[k]) each event is of
 
     @property
     def PREFIX(self) -> str:  # noqa: N802 (the C macros' spelling)
@@ -311,6 +312,7 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     joints = _joints(model) if model.joints else None
     present = set(model.phases) | ({"reloading"} if "restitution" in model.phases else set())
     outputs = [(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else [])
+    contact_points = _contact_points(model, [name for name, _ in outputs])
     return EmitContext(
         prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
         params=model.params, point_params=model.point_params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
@@ -327,7 +329,9 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         net=_net(model, t),
         joints=joints,
         point_fields=tuple(o for o, _ in POINT_OUTPUTS),
-        contact_points=_contact_points(model, [name for name, _ in outputs]),
+        contact_points=contact_points,
+        event_points=tuple(k for e in range(len(model.events) * len(contact_points)) for k, point in
+                           enumerate(contact_points) if point["first_event"] <= e < point["first_event"] + len(model.events)),
     )
 
 
@@ -364,7 +368,8 @@ def _contact_points(model: ModelExpressions, output_names: list[str]) -> tuple[d
         else:
             name, radius = f"joint {pm.number}", f"R_joint{pm.number}"
             names = tuple(f"{o}_J{pm.number}" for o, _ in POINT_OUTPUTS)
-        points.append({"name": name, "radius": radius,
+        first_event = len(model.events) * (0 if pm.number == n else 1 + model.spec.joints.index(pm.number))
+        points.append({"name": name, "radius": radius, "number": pm.number, "first_event": first_event,
                        "outputs": [output_names.index(o) if o in output_names else -1 for o in names]})
     return tuple(points)
 
@@ -423,13 +428,13 @@ def generate_scene_header(gen: GeneratedModel, scene) -> str:
 
 
 # The runtime's phase machine, written once for every model, and the root rule it includes.
-MACHINE_FILES = ("model_machine.h", "model_machine.c", "roots.h")
+MACHINE_FILES = ("model_machine.h", "model_machine_points.h", "model_machine.c", "model_stick_slip.c", "roots.h")
 
 
 def machine_files(prefix: str) -> dict[str, str]:
-    """The runtime's phase machine for a model of this prefix: model_machine.h and .c with
-    every model_ and MODEL_ name given the prefix (named <prefix>_machine.h and .c), and
-    roots.h as it is, so that a folder of generated C builds on its own."""
+    """The runtime's phase machine for a model of this prefix: its files with every model_ and
+    MODEL_ name given the prefix (<prefix>_machine.h, <prefix>_machine.c, ...), and roots.h as
+    it is, so that a folder of generated C builds on its own."""
     native = importlib.resources.files("impactgen") / "native"
     files = {}
     for name in MACHINE_FILES:

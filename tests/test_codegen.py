@@ -253,3 +253,29 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
         scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
         assert np.abs(fd[n:2 * n]).max() > 1e3  # the contact forces dominate the accelerations
         assert np.all(np.abs(J - fd)[:, :2 * n] <= 1e-5 * scale + 1e-9), phase
+
+
+def test_models_of_two_prefixes_link_into_one_program(tmp_path):
+    """--prefix gives every file and name of the model and of its phase machine the prefix, so
+    that two models (here with and without joint contact and exact Coulomb friction) compile
+    warning-free and link into one C program, each starting its own machine."""
+    from impactgen.codegen.emit import machine_files
+    specs = {"pend": ModelSpec(2), "fold": ModelSpec(4, "three-phase", "coulomb", True, True, (2, 3))}
+    for prefix, spec in specs.items():
+        for name, text in {**generate_model(spec, prefix).files(), **machine_files(prefix)}.items():
+            (tmp_path / name).write_text(text)
+    (tmp_path / "main.c").write_text(
+        '#include <stdio.h>\n#include "pend_machine.h"\n#include "fold_machine.h"\n'
+        "int main(void)\n{\n"
+        "    pend_params p = {0};\n    fold_params f = {0};\n    pend_machine pm;\n    fold_machine fm;\n"
+        "    double y[PEND_NSTATE] = {0}, z[FOLD_NSTATE] = {0};\n"
+        "    p.L1 = p.L2 = p.m1 = p.m2 = 1.0;\n    f.L1 = f.L2 = f.L3 = f.L4 = f.m1 = f.m2 = f.m3 = f.m4 = 1.0;\n"
+        "    p.surface_height = f.surface_height = -10.0;\n"
+        "    printf(\"%d %d\\n\", pend_machine_start(&pm, &p, 0.0, y, 1), fold_machine_start(&fm, &f, 0.0, z, 1));\n"
+        "    return 0;\n}\n")
+    sources = sorted(str(p) for p in tmp_path.glob("*.c"))
+    built = subprocess.run(["cc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-I", str(tmp_path), *sources,
+                            "-lm", "-o", str(tmp_path / "both")], capture_output=True, text=True)
+    assert built.returncode == 0, built.stderr[-2000:]
+    ran = subprocess.run([str(tmp_path / "both")], capture_output=True, text=True)
+    assert ran.returncode == 0 and ran.stdout.split() == ["0", "0"]  # both free, far above the surface

@@ -154,6 +154,15 @@ int main(int argc, char **argv)
                 "contact at it (pruned): generate it from a scene with these values\n", pruned);
         return 2;
     }
+    /* and every point of the chain must start on or above the surface (the scene checks' rule) */
+    double depth = 0.0;
+    const int inside = model_machine_start_inside(&p, y0, &depth);
+    if (inside >= 0) {
+        const char *where = inside == 0 ? "the pivot" : (inside == MODEL_NQ ? "the tip" : "a joint");
+        fprintf(stderr, "%s (point %d of the chain) starts %.3g m inside the surface: lower the surface or change "
+                "the initial angles\n", where, inside, depth);
+        return 2;
+    }
     for (int k = 0; k < MODEL_NSTATE; ++k) atol[k] = MODEL_SCENE_ATOL;
     char err[512];
     ig_solver *s = ig_solver_new(MODEL_SCENE_METHOD, USE_JACOBIAN, MODEL_SCENE_RTOL, atol,

@@ -331,6 +331,24 @@ int model_point_output(int k, int field)
     return index[k][field];
 }
 
+int model_first_event(int k)
+{
+    static const int first[MODEL_NCONTACT] = { 0 };
+    return first[k];
+}
+
+int model_event_point(int e)
+{
+    static const int point[MODEL_NEVENT] = { 0, 0, 0, 0, 0 };
+    return point[e];
+}
+
+int model_point_number(int k)
+{
+    static const int number[MODEL_NCONTACT] = { 3 };
+    return number[k];
+}
+
 double model_chain_length(const model_params *p)
 {
     return p->L1 + p->L2 + p->L3;

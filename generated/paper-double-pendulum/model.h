@@ -184,6 +184,13 @@ int model_yielded(const model_point_contact *pc);
 int model_phase_of(int state);
 /* The index in model_outputs' output of field MODEL_POINT_* of contact point k (-1: none). */
 int model_point_output(int k, int field);
+/* Contact point k's events in model_events' output: MODEL_NTIP_EVENT of them, in the order of
+ * the MODEL_EVENT_* of the tip, from model_first_event(k); model_event_point(e) is the point
+ * event e is of. model_point_number(k) is the point's number in the chain (1 to 1: the
+ * joint at the end of that link, 2: the tip), model_heights' order from 1. */
+int model_first_event(int k);
+int model_event_point(int e);
+int model_point_number(int k);
 /* The chain's length, mass and shortest link. */
 double model_chain_length(const model_params *p);
 double model_chain_mass(const model_params *p);

@@ -10,12 +10,8 @@
  *     reloading --passes delta_m--> elastic or elastoplastic (the curve it left)
  *     elastic/elastoplastic --max_compression, impacts chattering--> sustained --lift_off--> free
  *
- * Exact Coulomb friction (MODEL_COULOMB) keeps a stick-slip state beside the contact phase
- * (slip = +1 or -1 while the point slips along +x or -x, 0 while it sticks and F_f holds
- * v_x at 0):
- *     slip +1 --v_x falls to 0--> stick if the holding force is within mu F, else slip -1
- *     slip -1 --v_x rises to 0--> stick, or slip +1
- *     stick --F_f rises to +mu F--> slip -1        stick --F_f falls to -mu F--> slip +1
+ * Exact Coulomb friction (MODEL_COULOMB) keeps a stick-slip state beside the contact phase:
+ * model_stick_slip.c.
  *
  * The model supplies, per point, its outputs (penetration, rates, velocity, forces), its
  * events (model_events, MODEL_NTIP_EVENT per point), its acceleration into the surface and
@@ -26,127 +22,13 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "model_machine.h"
+#include "model_machine_points.h"
 #include "roots.h"
 
 #define RISING 1
 #define FALLING (-1)
 #define TIP MODEL_TIP_POINT
-#define POINT_EVENTS MODEL_NTIP_EVENT  /* each point's events, in the tip's order */
-
-/* ---- the contact points: the joints with contact code (k from 0), then the tip (k = TIP) ---- */
-/* The first event of point k in model_events' output: the tip's block first, then joint k's. */
-static int first_event(int k)
-{
-    return k == TIP ? 0 : POINT_EVENTS * (k + 1);
-}
-
-/* The point whose events event e is one of: first_event's inverse. */
-static int point_of_event(int e)
-{
-    const int block = e / POINT_EVENTS;  /* 0: the tip's events, k + 1: joint k's */
-    return block == 0 ? TIP : block - 1;
-}
-
-/* A point's quantities among the model's outputs. */
-typedef struct {
-    double delta, delta_rate, v_x, v_y, F, F_f;
-} point_outputs;
-
-static point_outputs outputs_at(const double *out, int k)
-{
-    point_outputs o;
-    o.delta = out[model_point_output(k, MODEL_POINT_DELTA)];
-    o.delta_rate = out[model_point_output(k, MODEL_POINT_DELTA_RATE)];
-    o.v_x = out[model_point_output(k, MODEL_POINT_V_X)];
-    o.v_y = out[model_point_output(k, MODEL_POINT_V_Y)];
-    o.F = out[model_point_output(k, MODEL_POINT_F)];
-#if MODEL_HAS_FRICTION
-    o.F_f = out[model_point_output(k, MODEL_POINT_F_F)];
-#else
-    o.F_f = 0.0;
-#endif
-    return o;
-}
-
-#if MODEL_CONSTRAINED
-/* A point's outputs at (t, y) were it under the force law `law` and (exact Coulomb) the slip
- * state `slip`, the other points as they are: what its force would be, for a decision. */
-static point_outputs outputs_as(const model_params *p, int point, int law, double slip, double t, const double *y)
-{
-    model_params as = *p;
-    as.point[point].phase = law;
-#if MODEL_COULOMB
-    as.point[point].slip = slip;
-#else
-    (void)slip;
-#endif
-    double out[MODEL_NOUT];
-    model_outputs(t, y, out, &as);
-    return outputs_at(out, point);
-}
-#endif
-
-#if MODEL_COULOMB
-/* A point stuck under exact Coulomb friction: in contact, v_x held at 0. */
-static int stuck(const model_point_machine *r)
-{
-    return r->state != MODEL_MACHINE_FREE && r->slip == 0.0;
-}
-
-static double sign_of(double x)
-{
-    return x > 0.0 ? 1.0 : -1.0;
-}
-
-/* The holding force of a point: the friction force that keeps its v_x at 0 at (t, y), under
- * the force law `law`. */
-static double holding_force(const model_params *p, int point, int law, double t, const double *y)
-{
-    return outputs_as(p, point, law, 0.0, t, y).F_f;
-}
-
-/* The slip state of a point that comes into contact with velocity (v_x, v_y) under normal
- * force F: slipping the way it moves, or, arriving with no tangential speed, as at a stop
- * with the holding force under the contact's first law (as the reference engine's). */
-static double arriving_slip(const model_params *p, int point, double t, const double *y, double v_x, double v_y,
-                            double F)
-{
-    const double speed = hypot(v_x, v_y);
-    if (fabs(v_x) > MODEL_TANGENTIAL_TOLERANCE * fmax(speed, 1e-300)) return sign_of(v_x);
-    const double hold = fabs(v_x) <= MODEL_TANGENTIAL_TOLERANCE * speed
-                            ? holding_force(p, point, MODEL_PHASE_ELASTIC, t, y) : 0.0;
-    return model_slip_when_stopped(F, hold, p->mu);
-}
-
-/* After a slip event of a point in contact (under normal force F): a stuck point slips the
- * way it is pushed (`backward`: along -x); at a stop the holding force lies within mu F or
- * pushes the point back the way it came; one pushing it on (only by rounding,
- * |F_hold| ~ mu F) means stick. */
-static double slip_after_event(const model_params *p, int point, double t, const double *y, double old,
-                               int backward, double F)
-{
-    if (old == 0.0) return backward ? -1.0 : 1.0;
-    const double now = model_slip_when_stopped(F, holding_force(p, point, p->point[point].phase, t, y), p->mu);
-    return now == old ? 0.0 : now;
-}
-
-/* A slip whose point has stopped, or moves the other way, after a contact event with no
- * stick-slip event is decided as at a stop: its own event can coincide with the contact
- * event and go unreported (a single bar stops sliding exactly when it stops penetrating). */
-static double slip_unless_stopped(const model_params *p, int point, double t, const double *y, double slip,
-                                  double v_x, double v_y, double F)
-{
-    if (v_x * slip > MODEL_STOPPED_TOLERANCE * hypot(v_x, v_y)) return slip;
-    return model_slip_when_stopped(F, holding_force(p, point, p->point[point].phase, t, y), p->mu);
-}
-#endif
-
-double model_slip_when_stopped(double F, double F_hold, double mu)
-{
-    if (fabs(F_hold) < mu * F) return 0.0;
-    return F_hold > 0.0 ? -1.0 : (F_hold < 0.0 ? 1.0 : 0.0);
-}
+#define POINT_EVENTS MODEL_NTIP_EVENT  /* each point's events, in the order of the tip's MODEL_EVENT_* */
 
 /* Whether a point at (t, y), with the outputs `out`, has no normal speed (up to rounding) but
  * the free chain pulls it into the surface (d2(delta)/dt2 beyond rounding of g): a resting or
@@ -212,7 +94,7 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
     }
     impact_scales(p, c->R, o.v_x, o.v_y, fmax(o.delta_rate, 0.0), out[MODEL_OUT_T], y, r->scale);
 #if MODEL_COULOMB
-    r->slip = c->slip = arriving_slip(p, point, t, y, o.v_x, o.v_y, o.F);
+    r->slip = c->slip = model_arriving_slip(p, point, t, y, o.v_x, o.v_y, o.F);
 #endif
 #if MODEL_FROZEN
     /* frozen friction: the direction the point slides at contact start, kept to separation */
@@ -359,7 +241,7 @@ int model_machine_events(const model_machine *m, int *events, int *directions)
     int k = 0;
     for (int point = 0; point < MODEL_NCONTACT; ++point) {
         const model_point_machine *r = &m->point[point];
-        const int base = first_event(point);
+        const int base = model_first_event(point);
         k += watch_state(r->state, base, events + k, directions + k);
 #if MODEL_COULOMB
         if (r->state != MODEL_MACHINE_FREE) k += watch_slip(r->slip, base, events + k, directions + k);
@@ -440,7 +322,7 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
                          e != MODEL_EVENT_SLIP_FORWARD;
     }
     if (slip_fired && state != MODEL_MACHINE_FREE) {
-        r->slip = c->slip = slip_after_event(p, point, t, y, r->slip, has[MODEL_EVENT_SLIP_BACKWARD], o.F);
+        r->slip = c->slip = model_slip_after_event(p, point, t, y, r->slip, has[MODEL_EVENT_SLIP_BACKWARD], o.F);
         act |= MODEL_ACT_SLIP;
     }
     if (!contact_fired) {  /* only the friction state changed */
@@ -468,7 +350,7 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
 #if MODEL_COULOMB
     if (state != MODEL_MACHINE_FREE && next != MODEL_MACHINE_FREE && r->slip != 0.0 && !slip_fired) {
         const double old = r->slip;
-        r->slip = c->slip = slip_unless_stopped(p, point, t, y, old, o.v_x, o.v_y, o.F);
+        r->slip = c->slip = model_slip_unless_stopped(p, point, t, y, old, o.v_x, o.v_y, o.F);
         if (r->slip != old) act |= MODEL_ACT_SLIP;
     }
 #endif
@@ -490,40 +372,6 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
     return act;
 }
 
-#if MODEL_COULOMB
-/* Several stuck points share the holding force (dependent rows, such as both ends of a link
- * lying flat, have no unique split), so a point that sticks can push another stuck point past
- * mu F at once, with no event left to cross. After each switch the stuck point loaded furthest
- * beyond mu F (by STICK_EXCESS) slips the way it is pushed, one at a time, until none is.
- * Returns the ACT_SLIP bit if a point was released. */
-static int release_overloaded(model_machine *m, model_params *p, double t, const double *y)
-{
-    int act = 0;
-    for (int pass = 0; pass < MODEL_NCONTACT; ++pass) {
-        double out[MODEL_NOUT];
-        model_outputs(t, y, out, p);
-        int worst = -1;  /* none yet */
-        double worst_excess = 0.0, worst_F_f = 0.0;
-        for (int point = 0; point < MODEL_NCONTACT; ++point) {
-            if (!stuck(&m->point[point])) continue;
-            const point_outputs o = outputs_at(out, point);
-            const double excess = fabs(o.F_f) - p->mu * o.F;
-            if (excess > MODEL_STICK_EXCESS * p->mu * fmax(o.F, 1e-300) && excess > worst_excess) {
-                worst = point;
-                worst_excess = excess;
-                worst_F_f = o.F_f;
-            }
-        }
-        if (worst < 0) return act;
-        model_point_machine *r = &m->point[worst];
-        r->slip = p->point[worst].slip = -sign_of(worst_F_f);
-        r->act |= MODEL_ACT_SLIP | MODEL_ACT_RESTART;
-        act |= MODEL_ACT_SLIP;
-    }
-    return act;
-}
-#endif
-
 int model_machine_switch(model_machine *m, model_params *p, double t, const double *y, const int *fired)
 {
     int events[MODEL_NEVENT] = {0}, directions[MODEL_NEVENT] = {0};  /* (filled by model_machine_events) */
@@ -541,13 +389,13 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     for (int k = 0; k < watched; ++k) {
         if (!fired[k]) continue;
         has[events[k]] = 1;
-        point_fired[point_of_event(events[k])] = 1;
+        point_fired[model_event_point(events[k])] = 1;
     }
     /* point after point, each under the force laws the points before it switched to */
     int act = 0, separated = 0, touching = 0;
     for (int point = 0; point < MODEL_NCONTACT; ++point) {
         if (!point_fired[point]) continue;
-        const int point_act = point_switch(m, p, point, has + first_event(point), t, y);
+        const int point_act = point_switch(m, p, point, has + model_first_event(point), t, y);
         act |= point_act & (MODEL_ACT_RESTART | MODEL_ACT_TOLERANCES);
         if (point_act & MODEL_ACT_IMPACT_END) separated = 1;
     }
@@ -555,46 +403,9 @@ int model_machine_switch(model_machine *m, model_params *p, double t, const doub
     for (int point = 0; point < MODEL_NCONTACT; ++point) touching |= m->point[point].state != MODEL_MACHINE_FREE;
     if (!m->run_to_time && separated && !touching) act |= MODEL_ACT_END;
 #if MODEL_COULOMB
-    if (act) act |= release_overloaded(m, p, t, y);
+    if (act) act |= model_release_overloaded(m, p, t, y);
 #endif
     return act;
-}
-
-void model_machine_observe(model_machine *m, const model_params *p, double t, const double *y)
-{
-#if MODEL_COULOMB
-    int any = 0;  /* a stuck point, whose friction force to keep */
-    for (int point = 0; point < MODEL_NCONTACT; ++point) any |= stuck(&m->point[point]);
-    if (!any) return;
-    double out[MODEL_NOUT];
-    model_outputs(t, y, out, p);
-    for (int point = 0; point < MODEL_NCONTACT; ++point) {
-        model_point_machine *r = &m->point[point];
-        if (!stuck(r)) continue;
-        const point_outputs o = outputs_at(out, point);
-        r->stick_excess = fmax(r->stick_excess, fabs(o.F_f) - p->mu * o.F);
-        r->stick_F = fmax(r->stick_F, o.F);
-    }
-#else
-    (void)m;
-    (void)p;
-    (void)t;
-    (void)y;
-#endif
-}
-
-int model_machine_stick_missed(const model_machine *m, const model_params *p)
-{
-#if MODEL_COULOMB
-    for (int point = 0; point < MODEL_NCONTACT; ++point) {
-        const model_point_machine *r = &m->point[point];
-        if (r->stick_excess > MODEL_STICK_EXCESS * p->mu * fmax(r->stick_F, 1e-300)) return 1;
-    }
-#else
-    (void)m;
-    (void)p;
-#endif
-    return 0;
 }
 
 int model_machine_constrained(const model_machine *m)
@@ -654,28 +465,6 @@ const char *model_machine_state_name(int state)
     return state >= 0 && state < (int)(sizeof names / sizeof names[0]) ? names[state] : "unknown";
 }
 
-const char *model_machine_slip_name(int state, double slip)
-{
-#if MODEL_COULOMB
-    if (state == MODEL_MACHINE_FREE) return "";
-    return slip > 0.0 ? "slip+" : (slip < 0.0 ? "slip-" : "stick");
-#else
-    (void)state;
-    (void)slip;
-    return "";
-#endif
-}
-
-/* The chain's point (model_heights' order, from 1) that contact point k is. */
-static int chain_point(int k)
-{
-#ifdef MODEL_NJOINT
-    if (k != TIP) return model_joint_number(k);
-#endif
-    (void)k;
-    return MODEL_NQ;
-}
-
 int model_machine_below(const model_params *p, const double *y, double *depth)
 {
     double h[MODEL_NPOINT];
@@ -683,7 +472,7 @@ int model_machine_below(const model_params *p, const double *y, double *depth)
     model_heights(y, h, p);
     /* a point with contact is measured from its own surface level (where it last lifted off
      * from rest, as the tip's y_s) */
-    for (int k = 0; k < MODEL_NCONTACT; ++k) h[chain_point(k) - 1] += p->point[TIP].y_s - p->point[k].y_s;
+    for (int k = 0; k < MODEL_NCONTACT; ++k) h[model_point_number(k) - 1] += p->point[TIP].y_s - p->point[k].y_s;
     for (int k = 0; k < MODEL_NPOINT; ++k) {
         if (h[k] < -MODEL_FLOOR_DEPTH * shortest) {
             *depth = -h[k];

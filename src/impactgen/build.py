@@ -46,11 +46,12 @@ COMPILE_ARGS = ("-O3", "-fno-math-errno")
 SANITIZE_ARGS = ("-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
                  "-fno-sanitize-recover=undefined")
 # The runtime written once for every model. The phase machine, the solver, the run loop and the
-# tallies include the generated model's header and are compiled with each model; the steppers under them, the explicit
-# pair and the small kernels include no model header and name no MODEL_* macro, so they are compiled
+# tallies include the generated model's header and are compiled with each model; the steppers
+# under them, the explicit pair and the small kernels include no model header and name no
+# MODEL_* macro, so they are compiled
 # once per cache into a static archive (RUNTIME_ARCHIVE) that every model links.
-MODEL_GLUE_FILES = ("model_machine.h", "model_machine.c", "solver.h", "solver_state.h", "solver.c", "run.c", "tally.h",
-                    "tally.c")
+MODEL_GLUE_FILES = ("model_machine.h", "model_machine_points.h", "model_machine.c", "model_stick_slip.c", "solver.h",
+                    "solver_state.h", "solver.c", "run.c", "tally.h", "tally.c")
 RUNTIME_FILES = ("roots.h", "stepper.h", "stepper.c", "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c",
                  "step_pair.c", "step_auto.c", "dopri5.h", "dopri5.c", "small_kernels.h", "small_kernels.c")
 GLUE_FILES = MODEL_GLUE_FILES + RUNTIME_FILES
