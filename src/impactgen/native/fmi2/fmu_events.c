@@ -31,16 +31,6 @@ void fmu_log_switch(const fmu_instance *c, double t, int point, int was, int now
     }
 }
 
-/* The chain's point (1 .. MODEL_NQ - 1 a joint, MODEL_NQ the tip) of the machine's point k. */
-static int chain_point(int k)
-{
-#ifdef MODEL_NJOINT
-    if (k != MODEL_TIP_POINT) return model_joint_number(k);
-#endif
-    (void)k;
-    return MODEL_NQ;
-}
-
 int fmu_event_update(fmu_instance *c)
 {
     double ev[MODEL_NEVENT];
@@ -53,7 +43,7 @@ int fmu_event_update(fmu_instance *c)
             for (int n = 0; n < MODEL_NCONTACT; ++n) {  /* the tip's first, as ig_run records them */
                 const int k = (MODEL_TIP_POINT + n) % MODEL_NCONTACT;
                 const model_point_machine *r = &c->m.point[k];
-                if (r->act) fmu_log_switch(c, c->t, chain_point(k), r->was, r->state, r->was_slip, r->slip, r->act);
+                if (r->act) fmu_log_switch(c, c->t, model_point_number(k), r->was, r->state, r->was_slip, r->slip, r->act);
             }
             fmu_invalidate(c);  /* the force law changed */
             model_events(c->t, c->y, ev, &c->p);
