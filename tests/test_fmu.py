@@ -458,3 +458,23 @@ def test_model_exchange_time_that_is_not_finite_or_goes_back_is_an_error(fmus, t
     assert "before the last completed step" in messages[-1]
     fmu.setTime(2e-6)
     fmu.freeInstance()
+
+
+# -- issue 44: one event update and one log of a switch for both kinds -------------------------
+
+def test_both_kinds_log_the_same_switches_stick_slip_included(tmp_path):
+    """Exact Coulomb friction: the tip's slip reverses within the impact. Model Exchange (the
+    FMU's event update) and Co-Simulation (ig_run's switches) log each switch alike, with the
+    slip labels of model_machine_slip_name, at the times of `impactgen run`."""
+    scene = impactgen.load_scene("coulomb")
+    path = build_fmu(scene, tmp_path / "coulomb.fmu")
+    run = impactgen.simulate(scene, t_end=1e-3)
+    logs = {kind: run_fmu(path, kind, 1e-3)[1] for kind in ("ModelExchange", "CoSimulation")}
+    for log in logs.values():
+        assert log.errors == []
+    me, cs = logs["ModelExchange"].events, logs["CoSimulation"].events
+    assert [(a, b) for _, a, b in me] == [(a, b) for _, a, b in cs]
+    assert ("slip-", "slip+") in [(a, b) for _, a, b in cs] or ("slip+", "slip-") in [(a, b) for _, a, b in cs]
+    phases = [(t, a, b) for t, a, b in cs if not a.startswith(("slip", "stick"))]
+    assert [(a, b) for _, a, b in phases] == [(a, b) for _, a, b in run.impacts[0].switches]
+    np.testing.assert_allclose([t for t, _, _ in me], [t for t, _, _ in cs], rtol=0, atol=1e-9)

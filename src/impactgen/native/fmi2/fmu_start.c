@@ -87,8 +87,8 @@ static int tip_inside(const fmu_instance *c, double *depth)
 static void log_start_inside(const fmu_instance *c, int point, double depth)
 {
     const double y_s = c->p.point[MODEL_TIP_POINT].y_s;
-    double tip = 0.0;
-    if (tip_inside(c, &tip) && c->p.surface_initial == 0.0) {
+    double tip = depth;
+    if (point == MODEL_NQ || (c->p.surface_initial == 0.0 && tip_inside(c, &tip))) {
         fmu_say(c, fmi2Error, "logStatusError", "surface.height: the tip of link %d starts %.3g m inside the "
                 "surface (tip at y = %.6g m, surface at %.6g m); lower the surface or change initial.q",
                 MODEL_NQ, tip, y_s - tip, y_s);
@@ -107,10 +107,10 @@ static void log_start_inside(const fmu_instance *c, int point, double depth)
  * the FMU was built from), could reach it with the values set now: the FMU has no contact law
  * for it, so it would pass through the surface unseen. Names the joint, its lengths' keys
  * (model_param_key) and their sum. */
-static void log_pruned_reach(const fmu_instance *c, int joint)
+static void log_pruned_reach(fmu_instance *c, int joint)
 {
     double reach = 0.0;
-    for (int i = 0; i < joint; ++i) reach += *model_param_slot((model_params *)&c->p, fmu_link_length[i]);
+    for (int i = 0; i < joint; ++i) reach += *model_param_slot(&c->p, fmu_link_length[i]);
     char lengths[160];
     if (joint == 1) snprintf(lengths, sizeof lengths, "%s", model_param_key(fmu_link_length[0]));
     else snprintf(lengths, sizeof lengths, "%s + ... + %s", model_param_key(fmu_link_length[0]),
