@@ -1,4 +1,4 @@
-"""Stage 7 of the pipeline: run the generated C phase machine against CVODE's root finder.
+"""Stage 7 of the pipeline: run the generated C phase machine on the C integrators' root finding.
 
 The machine (model_machine.c, printed from templates/machine.c.j2) decides everything of
 MODEL section 4: which force law and which events with directions each machine state has,
@@ -24,7 +24,7 @@ from .model_params import fill_params
 from .results import (Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory,
                       point_name, point_number)
 from .scene import Scene, Solver
-from .session import CvodeSession, Machine, MachineRun, Segment
+from .session import EngineSession, Machine, MachineRun, Segment
 from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
@@ -35,7 +35,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     """Simulate `scene` under `solver` (default: the scene's own) with the compiled `model`
     from phase to phase.
 
-    `t_eval` (sorted times) adds samples read from CVODE's interpolating polynomials;
+    `t_eval` (sorted times) adds samples read from the integrator's interpolating polynomials;
     `dense_output` keeps those polynomials as `result.sol`. Without `record_steps` (and
     without either of those) the samples are only the start, each phase switch and the end:
     all the summaries need. A solver failure ends the run with status "failed" and the
@@ -45,7 +45,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     if solver is None:
         solver = scene.solver
     params = fill_params(model, scene)
-    session = CvodeSession.open(model, solver)
+    session = EngineSession.open(model, solver)
     machine = session.phase_machine
     m = machine.state
     polynomials = dense_output or t_eval is not None
@@ -179,7 +179,7 @@ def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: lis
     return "failed", str(SolverError(message, STATES[machine.state.point[lib.MODEL_TIP_POINT].state], ran.t_last))
 
 
-def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, cuts: list[int],
+def _step_pieces(session: EngineSession, model: CompiledModel, ran: MachineRun, cuts: list[int],
                  states: list[int], params, sampler: TimeSampler | None) -> list[StepPolynomials]:
     """Each segment's step polynomials (a failed segment's last), and its samples at t_eval
     read with the parameters it ran under."""
@@ -196,7 +196,7 @@ def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, c
     return pieces
 
 
-def _outputs_at(session: CvodeSession, model: CompiledModel, params):
+def _outputs_at(session: EngineSession, model: CompiledModel, params):
     """The outputs at interpolated samples, under the parameters of their segment."""
     return lambda t, y: dict(zip(model.output_names, session.outputs(params, t, y).T))
 

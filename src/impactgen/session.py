@@ -1,10 +1,12 @@
-"""The CVODE integrator of a run, reused across runs of a warm process (stage 7, with phases.py).
+"""The C engine's integrator of a run, reused across runs of a warm process (stage 7, with phases.py).
 
-`CvodeSession` owns one `ig_solver` of the C runtime (native/solver.h) and runs the generated
-phase machine on it in C (ig_run), segment after segment, until the machine ends the run,
-the end time or a failure; it hands back the samples (every step, or only each segment's
-end), the segments' records and, for dense output, each step's interpolating polynomial. `likely_cause` turns a CVODE
-message into one that says what to try.
+`EngineSession` owns one `ig_solver` of the C runtime (native/solver.h: CVODE's BDF or Adams,
+the plain-C DOPRI5 pair, ERK, or "auto", which hands a stiff segment from the pair to BDF)
+and runs the generated phase machine on it in C (ig_run), segment after segment, until the
+machine ends the run, the end time or a failure; it hands back the samples (every step, or
+only each segment's end), the switch records and, for dense output, each step's
+interpolating polynomial. `likely_cause` turns an integrator's message into one that says
+what to try.
 """
 from __future__ import annotations
 
@@ -108,7 +110,7 @@ def summary_layout(ffi) -> SummaryLayout:
 
 
 class MachineRun(NamedTuple):
-    """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
+    """What one `EngineSession.run` gives back: the samples (rows), the finished segments,
     ig_run's last return code with the message of a failure, and the time the run stopped."""
 
     t: np.ndarray
@@ -124,15 +126,15 @@ class MachineRun(NamedTuple):
     joint_records: list[Segment]  # the joints' switches, each at the end of the segment it ended
 
 
-class CvodeSession:
-    """One CVODE integrator for a whole simulation, with the run's C buffers (the phase
+class EngineSession:
+    """One integrator (the scene's method) for a whole simulation, with the run's C buffers (the phase
     machine, the tolerances, the samples). `open` reuses an idle one of the same model and
     method (a warm process then allocates nothing per run); `close` returns it."""
 
-    _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
+    _idle: dict[tuple, list["EngineSession"]] = {}  # (model, method) -> sessions not in use
 
     @classmethod
-    def open(cls, model: CompiledModel, solver: Solver) -> "CvodeSession":
+    def open(cls, model: CompiledModel, solver: Solver) -> "EngineSession":
         """An idle session of this model and `solver`'s method, or a new one; `begin` a run on it."""
         key = model.lib, solver.method  # one library per build, hashed by identity
         try:
@@ -186,7 +188,7 @@ class CvodeSession:
         err = ffi.new("char[]", 512)
         made = lib.ig_solver_new(self.method, self.analytic, solver.rtol, self.atol_now, solver.max_steps, err, 512)
         if made == ffi.NULL:
-            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
+            raise SolverError(f"cannot create the integrator: {ffi.string(err).decode()}")
         return ffi.gc(made, lib.ig_solver_free)
 
     def begin(self, params, scene: Scene, solver: Solver) -> int:
@@ -200,12 +202,12 @@ class CvodeSession:
                                             solver.t_end is not None, solver.rtol, solver.atol, solver.max_steps,
                                             self.atol_now, self.t_buf, self.y_buf, self.out_buf, self.tally)
         if start < 0:
-            raise SolverError(f"cannot reset the CVODE solver: {self._message()}")
+            raise SolverError(f"cannot reset the integrator: {self._message()}")
         return start
 
     def _alloc(self) -> None:
         ffi = self.model.ffi
-        self.t_samples = np.empty(self.capacity)  # CVODE writes its steps here
+        self.t_samples = np.empty(self.capacity)  # the integrator writes its steps here
         self.y_samples = np.empty((self.capacity, self.model.nstate))
         self.t_buf = ffi.from_buffer("double[]", self.t_samples)
         self.y_buf = ffi.from_buffer("double[]", self.y_samples)
@@ -298,7 +300,7 @@ class CvodeSession:
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
-        return likely_cause(text or "CVODE failed without a message")
+        return likely_cause(text or "the integrator failed without a message")
 
 
 def method_code(lib, method: str) -> int:
@@ -307,13 +309,13 @@ def method_code(lib, method: str) -> int:
 
 
 def uses_jacobian(model: CompiledModel, solver: Solver) -> bool:
-    """Whether CVODE gets the model's analytic Jacobian: the model has one and the method is
-    implicit (the explicit Runge-Kutta pair uses none)."""
+    """Whether the integrator gets the model's analytic Jacobian: the model has one and the
+    method is implicit (the explicit Runge-Kutta methods use none)."""
     return bool(model.spec.jacobian) and solver.method not in EXPLICIT_METHODS
 
 
 def likely_cause(message: str) -> str:
-    """Add to a CVODE message what usually causes it and what to try."""
+    """Add to an integrator's message what usually causes it and what to try."""
     lower = message.lower()
     if "max_steps" in lower:
         hint = ("the phase needs more steps than allowed: raise solver.max_steps, loosen solver.rtol, "
