@@ -58,8 +58,8 @@ static void impact_begins(impact_list *list, int point, double t)
     list->n += 1;
 }
 
-/* Follow the impacts of every point through the segment records of one call of ig_run: each
- * switch has a record for the tip and one for each joint that switched (seg->point). */
+/* Follow the impacts of every point through the switch records of one call of ig_run: one
+ * record per point whose switch acted (seg->point). */
 static void follow_impacts(impact_list *list, const ig_segment *segments, int n)
 {
     for (int k = 0; k < n; ++k) {

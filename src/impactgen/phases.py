@@ -100,7 +100,7 @@ class Segments(NamedTuple):
     index of its first record) and the last one at the run's last sample."""
 
     ends: list[int]  # index in the records of each switch's first record
-    cuts: list[int]  # the start, each switch's sample, the last sample: segment j from cuts[j] to cuts[j + 1]
+    cuts: list[int]  # sample 0, then each switch's: segment j from cuts[j] to cuts[j + 1] (the last to the last sample)
     states: list[int]  # the tip's machine state in each segment (the last: where the run stopped)
     slips: list[float]  # and its stick-slip state
 
