@@ -19,8 +19,8 @@ from .build import CompiledModel
 from .codegen.spec import point_name
 from .errors import SolverError
 from .records import SwitchRecord, TallyRecords, record_layout, summary_layout, switch_record_layout
-from .results import BUDGET
 from .scene import EXPLICIT_METHODS, Scene, Solver
+from .summaries import BUDGET
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 RECORD_CAPACITY = 64  # switch records per C call of a run (at least one per contact point)
@@ -71,9 +71,9 @@ class MachineRun(NamedTuple):
 
 
 class EngineSession:
-    """One integrator (the scene's method) for a whole simulation, with the run's C buffers (the phase
-    machine, the tolerances, the samples). `open` reuses an idle one of the same model and
-    method (a warm process then allocates nothing per run); `close` returns it."""
+    """One integrator (the scene's method) for a whole simulation, with the run's C buffers
+    (the phase machine, the tolerances, the samples). `open` reuses an idle one of the same
+    model and method (a warm process then allocates nothing per run); `close` returns it."""
 
     _idle: dict[tuple, list["EngineSession"]] = {}  # (model, method) -> sessions not in use
 
