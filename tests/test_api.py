@@ -54,11 +54,12 @@ def test_summary_keys_are_in_the_order_a_sweep_writes_its_columns(paper_result, 
 
 
 def test_a_tallied_summary_gives_each_field_to_its_key():
-    """_from_tally unpacks Tallied in its field order: each field lands under its own name."""
-    from impactgen.results import Tallied, _from_tally
+    """from_tally unpacks Tallied in its field order: each field lands under its own name."""
+    from impactgen.results import Tallied
+    from impactgen.summaries import from_tally
     values = [float(k + 1) for k in range(len(Tallied._fields) - 1)]  # all but y_final, each its own
     tallied = Tallied(*values, y_final=(0.1, 0.2, 0.3, 0.4))
-    summary = _from_tally(tallied, 2, [])
+    summary = from_tally(tallied, 2, [])
     flat = {**summary, **summary["energy"]}
     for name in Tallied._fields:
         if name in flat:

@@ -194,3 +194,33 @@ def test_each_points_stick_slip_records_follow_on_from_each_other(mu):
     assert result.status == "ok", result.message
     links = [(a, b) for impact in result.impacts for a, b in zip(impact.stick_slip, impact.stick_slip[1:])]
     assert len(links) > 30 and all(a[2] == b[1] for a, b in links), [(a, b) for a, b in links if a[2] != b[1]]
+
+
+def test_the_switch_records_are_one_stream_each_naming_its_point(monkeypatch):
+    """C writes, at a switch, one record per point whose switch acted, in point order, each
+    once, each with that point's own states; none at the end time. Each point's records follow
+    on from each other, and the run's segments are its switches plus the one the end time ended."""
+    from impactgen.session import EngineSession
+    runs = []
+    run = EngineSession.run
+    monkeypatch.setattr(EngineSession, "run", lambda self, *a, **k: runs.append(run(self, *a, **k)) or runs[-1])
+    scene = impactgen.load_scene("paper", {**JOINT_LANDS, "solver.t_end": 0.7, "contact.friction_mode": "coulomb",
+                                           "contact.friction": 0.3})
+    result = impactgen.simulate(scene, record_steps=False)
+    assert result.status == "ok", result.message
+    records = runs[-1].records
+    assert {rec.point for rec in records} == {2, 3} and all(rec.act for rec in records)
+    assert all(rec.event >= 0 for rec in records)  # every record is a switch's: none at the end time
+    switches: dict[int, list[int]] = {}
+    for rec in records:
+        switches.setdefault(rec.sample, []).append(rec.point)
+    assert list(switches) == sorted(switches)
+    assert all(points == sorted(set(points)) for points in switches.values())  # point order, each once
+    assert any(len(points) > 1 for points in switches.values())  # (a switch of both points is among them)
+    last: dict[int, tuple] = {}
+    for rec in records:
+        if rec.point in last:
+            assert (rec.state, rec.slip) == last[rec.point]
+        last[rec.point] = (rec.next_state, rec.next_slip)
+    assert result.stats["segments"] == len(switches) + 1 == len(result.phases)
+    assert result.phases[-1].ended_by == "t_end"

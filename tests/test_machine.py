@@ -145,7 +145,8 @@ def test_the_embedding_guide_lists_the_parameter_table():
     ((-70.0, -60.0), None, -1),          # the paper's start: the tip on the surface
     ((-70.0, -60.0), -1.81, -1),         # the tip above it
     ((-70.0, -60.0), -1.8, 2),           # the tip 6 mm inside the surface
-    ((-30.0, -90.0), -0.49, 1),          # joint 1 below the surface, the tip above it
+    ((-30.0, -90.0), -0.49, 2),          # joint 1 and the tip below the surface: the tip named first
+    ((-30.0, 90.0), -0.49, 1),           # joint 1 below the surface, the tip above it
     ((-30.0, 80.0), None, 0),            # surface "initial": the tip high, the pivot under it
     ((20.0, 0.0), -0.1, -1),             # every point above the surface
     ((-70.0, -60.0), 0.2, 0),            # the pivot under the surface

@@ -230,10 +230,10 @@ def test_the_summaries_tallied_in_c_equal_those_computed_from_the_samples(name, 
     same summaries computed in Python from the run's samples and impacts (results.py, as the
     reference engine's are) agree bit for bit: runs to separation and to a time, later
     impacts, sustained contact, friction, a failure, no impact, a run ending in contact."""
-    from impactgen.results import _first_impact_summary, _run_summary
+    from impactgen.summaries import first_impact_summary, run_summary
     scene = impactgen.load_scene(name, overrides=overrides)
     for record_steps in (True, False):
         result = impactgen.simulate(scene, record_steps=record_steps)
         assert result.tallied is not None
-        _same(result.first_impact, _first_impact_summary(result), "first_impact")
-        _same(result.summary, result.first_impact if result._to_separation() else _run_summary(result), "summary")
+        _same(result.first_impact, first_impact_summary(result), "first_impact")
+        _same(result.summary, result.first_impact if result._to_separation() else run_summary(result), "summary")

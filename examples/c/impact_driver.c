@@ -58,8 +58,8 @@ static void impact_begins(impact_list *list, int point, double t)
     list->n += 1;
 }
 
-/* Follow the impacts of every point through the segment records of one call of ig_run: each
- * switch has a record for the tip and one for each joint that switched (seg->point). */
+/* Follow the impacts of every point through the switch records of one call of ig_run: one
+ * record per point whose switch acted (seg->point). */
 static void follow_impacts(impact_list *list, const ig_segment *segments, int n)
 {
     for (int k = 0; k < n; ++k) {
@@ -101,12 +101,9 @@ static void run_scene(ig_solver *s, const model_params *inputs, const double *y0
     if (list) {  /* the points in contact from the start */
         list->n = 0;
         for (int i = 0; i <= MODEL_NQ; ++i) list->open[i] = -1;
-        if (start == MODEL_START_CONTACT) impact_begins(list, MODEL_NQ, r->t);
-#ifdef MODEL_NJOINT
-        for (int k = 0; k < MODEL_NJOINT; ++k) {
-            if (m.point[k].state != MODEL_MACHINE_FREE) impact_begins(list, model_joint_number(k), r->t);
+        for (int k = 0; k < MODEL_NCONTACT; ++k) {
+            if (m.point[k].state != MODEL_MACHINE_FREE) impact_begins(list, model_point_number(k), r->t);
         }
-#endif
     }
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY || start < 0) {
         r->status = start < 0 ? "failed" : "no-impact";

@@ -65,7 +65,7 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         A checked scene (`load_scene`, `scene_from_dict`), or a scene file or a shipped
         example's name, loaded as `load_scene` loads it.
     engine : {"c", "reference"}, default "c"
-        "c": the generated C model under SUNDIALS CVODE (built on first use, then cached).
+        "c": the generated C model on its C integrators (built on first use, then cached).
         "reference": the independent pure-Python engine on scipy's solve_ivp.
     method : str, optional
         The integrator. C engine: "auto" (the scene default: the plain-C explicit pair,

@@ -1,30 +1,32 @@
-"""Stage 7 of the pipeline: run the generated C phase machine against CVODE's root finder.
+"""Stage 7 of the pipeline: run the generated C phase machine on the C integrators' root finding.
 
 The machine (model_machine.c, printed from templates/machine.c.j2) decides everything of
 MODEL section 4: which force law and which events with directions each machine state has,
 and what each switch records (delta_m, P_m, delta_r, R_res, stick/slip, sustained contact,
 lift-off, later impacts). Its loop runs in C (ig_run in the glue, through session.py): a
-whole impact is one C call. This module turns what the loop recorded, the samples and one
-record per phase segment, into the result: the phase spans, one `Impact` per impact, the
-trajectory, and the samples at `t_eval` or the dense output.
+whole impact is one C call. This module turns what the loop recorded, the samples and the
+switch records (one per point that switched, tally.h), into the result: one `Impact` per
+impact of each point, the phase spans and the trajectory's phases (the tip's: the chain's
+end), and the samples at `t_eval` or the dense output.
 """
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .build import CompiledModel
-from .codegen.spec import STATES
+from .codegen.spec import STATES, point_name
 from .dense import DenseSolution, StepPolynomials, TimeSampler
 from .errors import SolverError
 from .model_params import fill_params
-from .results import (Columns, Impact, PhaseSpan, Ready, SimulationResult, TallyRecords, Trajectory,
-                      point_name, point_number)
+from .records import SwitchRecord, TallyRecords
+from .results import Columns, Impact, PhaseSpan, Ready, SimulationResult, Trajectory
 from .scene import Scene, Solver
-from .session import CvodeSession, Machine, MachineRun, Segment
+from .session import EngineSession, Machine, MachineRun
 from .validity import YieldScale
 
 MAX_SEGMENTS = 100_000  # phase switches in one run: beyond this, stop rather than hang
@@ -35,7 +37,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     """Simulate `scene` under `solver` (default: the scene's own) with the compiled `model`
     from phase to phase.
 
-    `t_eval` (sorted times) adds samples read from CVODE's interpolating polynomials;
+    `t_eval` (sorted times) adds samples read from the integrator's interpolating polynomials;
     `dense_output` keeps those polynomials as `result.sol`. Without `record_steps` (and
     without either of those) the samples are only the start, each phase switch and the end:
     all the summaries need. A solver failure ends the run with status "failed" and the
@@ -45,45 +47,42 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     if solver is None:
         solver = scene.solver
     params = fill_params(model, scene)
-    session = CvodeSession.open(model, solver)
+    session = EngineSession.open(model, solver)
     machine = session.phase_machine
     m = machine.state
     polynomials = dense_output or t_eval is not None
     session.keep_polynomials(polynomials)  # before begin: it may make new sample buffers
     start = session.begin(params, scene, solver)
-    tip = m.point[lib.MODEL_TIP_POINT]
-    state0 = tip.state
+    tip = m.point[machine.tip_index]
+    tip_start = tip.state, tip.slip
     if start in (lib.MODEL_START_ALONG, lib.MODEL_START_AWAY):
         first_row, tallied = session.without_run()
         session.close()
         return _no_impact_at_start(scene, solver, model, session.y0.copy(), first_row.tolist(),
                                    start == lib.MODEL_START_ALONG, started, tallied)
-    in_contact = start == lib.MODEL_START_CONTACT
-    joints_at_start = [model.lib.model_joint_number(k) for k in range(len(model.spec.joints))
-                       if m.point[k].state != machine.free] if model.spec.joints else []
+    at_start = machine.in_contact()
     ran = session.run(params, solver.t_max if solver.t_end is None else solver.t_end, solver.atol, MAX_SEGMENTS,
                       every_step=record_steps or polynomials, with_params=t_eval is not None)
-    impacts = _impacts(machine, ran.segments, in_contact)
-    if model.spec.joints:
-        n = model.spec.links  # in time order; at one time, joints first (as the floor net numbers the points)
-        impacts = sorted(impacts + _joint_impacts(machine, ran.joint_records, joints_at_start, n),
-                         key=lambda impact: (impact.t_start, point_number(impact.point, n)))
+    impacts = _impacts(machine, ran.records, at_start)
     status, message = _status(lib, solver, machine, ran, impacts)
+    reached_end = ran.flag == lib.IG_REACHED_END  # the last segment ended at the end time, not at a switch
 
-    trajectory = partial(_trajectory, ran, state0, tip.state, session.output_index, model.state_names)
+    segments = partial(_segments, ran.records, machine.tip, *tip_start)
+    trajectory = partial(_trajectory, ran, segments, session.output_index, model.state_names)
     sampler = TimeSampler(t_eval) if t_eval is not None else None
     sol = None
     if polynomials:
-        pieces = _step_pieces(session, model, ran, *_runs(ran.segments, len(ran.t), state0, tip.state), params, sampler)
+        pieces = _step_pieces(session, model, ran, segments(), params, sampler)
         if dense_output:
             sol = DenseSolution([0.0, *(float(p.t_ends[-1]) for p in pieces)], pieces, model.nstate)
     counters = session.counters()
     if status != "failed":  # a failed integrator is not handed to the next run
         session.close()
-    stats = partial(_stats, session.stats_names, counters, len(ran.segments), len(ran.t), time.perf_counter() - started)
+    stats = partial(_stats, session.stats_names, counters, segments, reached_end, len(ran.t),
+                    time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names), model.state_names) if sampler else None
     contact = _yield_scales(model, params) if model.spec.plastic else None
-    spans = partial(_spans, machine, model.event_names, ran.segments)
+    spans = partial(_spans, machine, model.event_names, segments, ran, reached_end)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries, solver)
 
@@ -95,38 +94,65 @@ def _yield_scales(model: CompiledModel, params) -> dict[str, YieldScale]:
             for number, point in zip(numbers, params.point)}
 
 
-def _trajectory(ran: MachineRun, state0: int, state_end: int, output_index: dict[str, int],
+class Segments(NamedTuple):
+    """The run's segments as the tip went through them (the run's phases are the tip's: the
+    chain's end), read from the switch records: segment j ends at switch j (ends[j]: the
+    index of its first record) and the last one at the run's last sample."""
+
+    ends: list[int]  # index in the records of each switch's first record
+    cuts: list[int]  # sample 0, then each switch's: segment j from cuts[j] to cuts[j + 1] (the last to the last sample)
+    states: list[int]  # the tip's machine state in each segment (the last: where the run stopped)
+    slips: list[float]  # and its stick-slip state
+
+
+def _segments(records: list[SwitchRecord], tip: int, state: int, slip: float) -> Segments:
+    """The run's segments from its switch records (a switch's records share its sample),
+    the tip beginning in (state, slip) and staying in what its last record went to."""
+    ends, cuts, states, slips = [], [0], [], []
+    sample = -1
+    for j, rec in enumerate(records):
+        if rec.sample != sample:  # a switch's first record
+            sample = rec.sample
+            ends.append(j)
+            cuts.append(sample)
+            states.append(state)
+            slips.append(slip)
+        if rec.point == tip:
+            state, slip = rec.next_state, rec.next_slip
+    return Segments(ends, cuts, states + [state], slips + [slip])
+
+
+def _trajectory(ran: MachineRun, segments: Callable[[], Segments], output_index: dict[str, int],
                 state_names: tuple[str, ...]) -> Trajectory:
     """The samples of a run (made when first asked for: a summary needs none)."""
-    return Trajectory(ran.t, ran.y, _phase_labels(ran.segments, len(ran.t), state0, state_end),
-                      Columns(output_index, ran.outputs), state_names)
+    return Trajectory(ran.t, ran.y, _phase_labels(segments(), len(ran.t)), Columns(output_index, ran.outputs),
+                      state_names)
 
 
-def _runs(segments: list[Segment], n_samples: int, state0: int, state_end: int) -> tuple[list[int], list[int]]:
-    """The samples as runs of one machine state: the start, then each segment's (after
-    sample cuts[j] to sample cuts[j + 1]; a failed segment's rows last), in states[j + 1]."""
-    cuts = [0, *(seg.sample for seg in segments), n_samples - 1]
-    return cuts, [state0, *(seg.state for seg in segments), state_end]
-
-
-def _phase_labels(segments: list[Segment], n_samples: int, state0: int, state_end: int) -> np.ndarray:
+def _phase_labels(segments: Segments, n_samples: int) -> np.ndarray:
     """The phase of the step that ended at each sample (the start: the state it began in)."""
-    cuts, states = _runs(segments, n_samples, state0, state_end)
+    cuts = [*segments.cuts, n_samples - 1]
+    states = [segments.states[0], *segments.states]
     return np.repeat(np.array([STATES[s] for s in states]), [1, *np.diff(cuts)])
 
 
-def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) -> list[Impact]:
-    """The impacts, from the machine's record of each segment's end."""
-    impacts = [Impact(0.0, 0)] if contact_at_start else []
-    label, free = machine.slip_label, machine.free
+def _impacts(machine: Machine, records: list[SwitchRecord], at_start: list[str]) -> list[Impact]:
+    """Every point's impacts, from its switch records, in the order they began (at one time in
+    point order, as the records come); `at_start`: the points in contact from the start."""
+    impacts = [Impact(0.0, 0, point=name) for name in at_start]
+    latest = {impact.point: impact for impact in impacts}  # each point's impact going on (or last)
+    names, label, free = machine.names, machine.slip_label, machine.free
     BEGIN, SLIP, MAX_COMPRESSION, END = machine.acts
-    # each record unpacked in Segment's field order (a field read by name costs a descriptor call)
-    for t, sample, state, slip, _, act, next_state, next_slip, delta_max, P_max, delta_r, R_res, _point in segments:
+    # each record unpacked in SwitchRecord's field order (a field read by name costs a descriptor call)
+    for t, sample, state, slip, _, act, next_state, next_slip, delta_max, P_max, delta_r, R_res, point in records:
+        name = names[point]
         if act & BEGIN:
-            impacts.append(Impact(t, sample))
-        if not impacts:  # a flight before the first impact
-            continue
-        impact = impacts[-1]
+            impact = latest[name] = Impact(t, sample, point=name)
+            impacts.append(impact)
+        else:
+            impact = latest.get(name)
+            if impact is None:  # a flight before the point's first impact
+                continue
         if act & SLIP:
             impact.stick_slip.append((t, label(state, slip), label(next_state, next_slip)))
         if act & MAX_COMPRESSION:
@@ -139,32 +165,27 @@ def _impacts(machine: Machine, segments: list[Segment], contact_at_start: bool) 
     return impacts
 
 
-def _joint_impacts(machine: Machine, records: list[Segment], at_start: list[int], n: int) -> list[Impact]:
-    """The joints' impacts, from the records of their switches (`_impacts` per joint)."""
-    impacts = []
-    for joint in sorted({seg.point for seg in records} | set(at_start)):
-        mine = _impacts(machine, [seg for seg in records if seg.point == joint], joint in at_start)
-        for impact in mine:
-            impact.point = point_name(joint, n)
-        impacts += mine
-    return impacts
-
-
-def _spans(machine: Machine, event_names: tuple[str, ...], segments: list[Segment]) -> list[PhaseSpan]:
-    """The phase spans, one per segment: made when first asked for (a summary needs none)."""
-    spans, t0, label = [], 0.0, machine.slip_label
-    for seg in segments:
-        event = event_names[seg.event] if seg.event >= 0 else "t_end"
-        spans.append(PhaseSpan(STATES[seg.state], t0, seg.t, event, label(seg.state, seg.slip)))
-        t0 = seg.t
+def _spans(machine: Machine, event_names: tuple[str, ...], segments: Callable[[], Segments], ran: MachineRun,
+           reached_end: bool) -> list[PhaseSpan]:
+    """The phase spans, one per segment (a failed run's last segment has none): made when first
+    asked for (a summary needs none)."""
+    seg, label, records = segments(), machine.slip_label, ran.records
+    ends = [(records[j].t, event_names[records[j].event] if records[j].event >= 0 else "t_end") for j in seg.ends]
+    if reached_end:
+        ends.append((ran.t_last, "t_end"))
+    spans, t0 = [], 0.0
+    for (t1, event), state, slip in zip(ends, seg.states, seg.slips):
+        spans.append(PhaseSpan(STATES[state], t0, t1, event, label(state, slip)))
+        t0 = t1
     return spans
 
 
-def _stats(names: tuple[str, ...], counters: tuple[int, ...], segments: int, samples: int,
-           wall_s: float) -> dict[str, Any]:
-    """The integrator's counters by name, then the run's segments, samples and wall time (made
-    when first asked for)."""
-    return {**dict(zip(names, counters)), "segments": segments, "samples": samples, "wall_s": wall_s}
+def _stats(names: tuple[str, ...], counters: tuple[int, ...], segments: Callable[[], Segments], reached_end: bool,
+           samples: int, wall_s: float) -> dict[str, Any]:
+    """The integrator's counters by name, then the run's segments (those a switch ended, and
+    one that reached the end time), samples and wall time (made when first asked for)."""
+    ended = len(segments().ends) + reached_end
+    return {**dict(zip(names, counters)), "segments": ended, "samples": samples, "wall_s": wall_s}
 
 
 def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: list[Impact]) -> tuple[str, str]:
@@ -172,31 +193,32 @@ def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: lis
     if ran.flag == lib.IG_RUN_DONE:
         return "ok", ""
     if ran.flag == lib.IG_REACHED_END:
-        return _end_without_event(solver, impacts, STATES[ran.segments[-1].state])
+        return _end_without_event(solver, impacts, STATES[machine.state.point[machine.tip_index].state])
     message = ran.message
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
-    return "failed", str(SolverError(message, STATES[machine.state.point[lib.MODEL_TIP_POINT].state], ran.t_last))
+    return "failed", str(SolverError(message, STATES[machine.state.point[machine.tip_index].state], ran.t_last))
 
 
-def _step_pieces(session: CvodeSession, model: CompiledModel, ran: MachineRun, cuts: list[int],
-                 states: list[int], params, sampler: TimeSampler | None) -> list[StepPolynomials]:
+def _step_pieces(session: EngineSession, model: CompiledModel, ran: MachineRun, segments: Segments, params,
+                 sampler: TimeSampler | None) -> list[StepPolynomials]:
     """Each segment's step polynomials (a failed segment's last), and its samples at t_eval
     read with the parameters it ran under."""
     pieces = []
+    cuts = [*segments.cuts, len(ran.t) - 1]
     for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
         if b == a:
             continue
         piece = StepPolynomials(ran.t[a + 1:b + 1], ran.dense[a + 1:b + 1])
         pieces.append(piece)
         if sampler is not None:
-            seg_params = ran.segment_params[j] if j < len(ran.segments) else params
+            seg_params = ran.record_params[segments.ends[j]] if j < len(segments.ends) else params
             sampler.segment(float(ran.t[b]), piece, _outputs_at(session, model, seg_params),
-                            STATES[states[j + 1]])
+                            STATES[segments.states[j]])
     return pieces
 
 
-def _outputs_at(session: CvodeSession, model: CompiledModel, params):
+def _outputs_at(session: EngineSession, model: CompiledModel, params):
     """The outputs at interpolated samples, under the parameters of their segment."""
     return lambda t, y: dict(zip(model.output_names, session.outputs(params, t, y).T))
 

@@ -5,21 +5,37 @@ two summaries: the run's (what a run to a time ends with) and its first impact's
 section 6, with its energy budget). As in solve_ivp, `t` is (n_points,) and `y` is
 (n_states, n_points); a failure is a result with `success` False, not an exception. Both
 engines fill the same types, so their results compare key by key.
+
+The phase spans and impacts are impacts.py's, the summaries summaries.py's, the C engine's
+records records.py's; the names of theirs that users and the other modules import from here
+are listed in `__all__`.
 """
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Generic, NamedTuple, TypeVar
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
 from .codegen.spec import point_name, point_number
 from .dense import NO_DENSE_OUTPUT, DenseSolution, NoDenseOutput
+from .impacts import (COEFFICIENT_UNITS, COEFFICIENTS, IMPACT_UNITS, Impact, PhaseSpan, impact_coefficients,
+                      tip_impacts)
+from .records import Tallied, TallyRecords
 from .scene import Scene, Solver, replace_solver
+from .summaries import (BUDGET, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, energy_balance, energy_budget,
+                        first_impact_summary, from_tally, run_summary)
 from .validity import YieldScale, energy_warning, frozen_friction_warning, validity_warnings
+
+__all__ = [  # defined here, then kept where they were first imported from (impacts, summaries, records)
+    "OUTPUT_UNITS", "Ready", "Trajectory", "Columns", "SimulationResult",
+    "PhaseSpan", "Impact", "tip_impacts", "impact_coefficients", "COEFFICIENT_UNITS", "COEFFICIENTS", "IMPACT_UNITS",
+    "energy_balance", "SUMMARY_LEADING", "SUMMARY_LATER", "ENERGY_TERMS", "BUDGET", "Tallied", "TallyRecords",
+    "point_name", "point_number",
+]
 
 Part = TypeVar("Part")
 
@@ -27,88 +43,6 @@ Part = TypeVar("Part")
 # link, come beside them), with their units.
 OUTPUT_UNITS = {"x_B": "m", "y_B": "m", "v_Bx": "m/s", "v_By": "m/s", "delta": "m",
                 "delta_rate": "m/s", "F": "N", "F_f": "N", "T": "J", "V": "J"}
-
-
-@dataclass
-class PhaseSpan:
-    phase: str  # "free", "elastic", "elastoplastic", "restitution", "reloading", "sustained"
-    t0: float
-    t1: float
-    ended_by: str  # the event that ended it, or "t_end"
-    slip_state: str = ""  # exact Coulomb friction: "slip+", "slip-" or "stick" during the span
-
-    def to_dict(self) -> dict[str, Any]:
-        out = {"phase": self.phase, "t0": self.t0, "t1": self.t1, "ended_by": self.ended_by}
-        if self.slip_state:
-            out["slip_state"] = self.slip_state
-        return out
-
-
-@dataclass
-class Impact:
-    """One impact: from first contact to separation, with the values fixed at its switches
-    (by the engine) and its energies (filled from the samples when the result is made)."""
-
-    t_start: float
-    i_start: int  # sample index at first contact
-    t_end: float | None = None  # separation; None if the run ended in contact
-    i_end: int | None = None
-    delta_max: float = 0.0  # m, at maximum compression
-    P_max: float = 0.0  # N, the normal force there
-    delta_r: float = 0.0  # m, permanent deformation (Eq. 12)
-    R_res: float = 0.0  # m, radius of the unloading curve
-    switches: list[tuple[float, str, str]] = field(default_factory=list)  # (t, from, to)
-    stick_slip: list[tuple[float, str, str]] = field(default_factory=list)  # exact Coulomb: (t, from, to)
-    T_before: float = math.nan  # J, kinetic energy at first contact
-    T_after: float = math.nan  # J, at separation (or the end of the run)
-    W_normal: float = 0.0  # J, work of the normal force over the impact (of every point's: the energy budget's)
-    W_friction: float = 0.0  # J
-    W_gravity: float = 0.0  # J
-    W_normal_point: float = math.nan  # J, work of this point's own normal force over the impact
-    W_friction_point: float = math.nan  # J, of its own friction force
-    i_max: int | None = None  # sample index at (the latest) maximum compression
-    # impulses and coefficients of restitution (docs/model.md section 9; COEFFICIENTS), from
-    # the samples at its start, maximum compression and end; NaN until it has ended
-    v_n0: float = math.nan  # m/s, the point's normal speed at first contact (negative approaching)
-    P_c: float = math.nan  # N s, normal impulse of compression
-    P_r: float = math.nan  # N s, of restitution
-    P_t: float = math.nan  # N s, tangential (friction) impulse
-    e_N: float = math.nan  # kinematic (Newton): -v_n(end) / v_n0
-    e_P: float = math.nan  # kinetic (Poisson): P_r / P_c
-    e_E: float = math.nan  # energetic (Stronge): sqrt(W_r / -W_c)
-    friction_share: float = math.nan  # W_friction / (W_normal + W_friction): friction's share of the loss
-    point: str = "tip"  # the contact point: "tip", or "joint k" (the end of link k)
-
-    @property
-    def duration(self) -> float | None:
-        return None if self.t_end is None else self.t_end - self.t_start
-
-    def coefficients(self) -> dict[str, float]:
-        """The impulses and coefficients of restitution (COEFFICIENTS) by name."""
-        return {name: getattr(self, name) for name in COEFFICIENTS}
-
-    def to_dict(self) -> dict[str, Any]:
-        """One row of the impacts table (JSON and DataFrame)."""
-        return {
-            "point": self.point, "t_start": self.t_start, "t_end": self.t_end, "duration": self.duration,
-            "delta_max": self.delta_max, "delta_r": self.delta_r, "P_max": self.P_max,
-            "R_res": self.R_res, "T_before": self.T_before, "T_after": self.T_after,
-            "W_normal": self.W_normal, "W_friction": self.W_friction, "W_gravity": self.W_gravity,
-            "W_normal_point": self.W_normal_point, "W_friction_point": self.W_friction_point,
-            **self.coefficients(),
-            "switches": _switch_list(self.switches), "stick_slip": _switch_list(self.stick_slip),
-        }
-
-
-def tip_impacts(impacts: list[Impact]) -> list[Impact]:
-    """The tip's impacts: what a run's summaries and the impact laws are made of (the joints'
-    impacts are listed beside them, each naming its point)."""
-    return [impact for impact in impacts if impact.point == "tip"]
-
-
-def _switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:
-    """(t, from, to) switches as the summaries and the impacts table write them."""
-    return [{"t": t, "from": a, "to": b} for t, a, b in items]
 
 
 @dataclass(frozen=True)
@@ -120,31 +54,6 @@ class Ready(Generic[Part]):
 
     def __call__(self) -> Part:
         return self.value
-
-
-# The impulses and coefficients of restitution of an impact (docs/model.md section 9), with units.
-COEFFICIENT_UNITS = {"v_n0": "m/s", "P_c": "N s", "P_r": "N s", "P_t": "N s", "e_N": "1", "e_P": "1", "e_E": "1",
-                     "friction_share": "1"}
-COEFFICIENTS = tuple(COEFFICIENT_UNITS)
-IMPACT_UNITS = {"point": "", "t_start": "s", "t_end": "s", "duration": "s", "delta_max": "m", "delta_r": "m",
-                "P_max": "N", "R_res": "m", "T_before": "J", "T_after": "J", "W_normal": "J",
-                "W_friction": "J", "W_gravity": "J", "W_normal_point": "J", "W_friction_point": "J",
-                **COEFFICIENT_UNITS}
-
-
-def impact_coefficients(begin, at_max, end, v_n0: float, v_n1: float) -> dict[str, float]:
-    """The impulses and coefficients (COEFFICIENTS) of an impact from its integrated states
-    (dicts by state name, `Trajectory.states_at`: the works and the impulses) at its start, at its maximum
-    compression and at its end, and the normal speed at its start and end. The C engine
-    tallies the same arithmetic (tally.c, summarize_coefficients)."""
-    W_c, W_r = at_max["W_normal"] - begin["W_normal"], end["W_normal"] - at_max["W_normal"]
-    W_f = end.get("W_friction", 0.0) - begin.get("W_friction", 0.0)
-    P_c, P_r = at_max["P_normal"] - begin["P_normal"], end["P_normal"] - at_max["P_normal"]
-    ratio = W_r / -W_c if W_c != 0 else math.nan
-    return {"v_n0": v_n0, "P_c": P_c, "P_r": P_r, "P_t": end.get("P_friction", 0.0) - begin.get("P_friction", 0.0),
-            "e_N": -v_n1 / v_n0 if v_n0 != 0 else math.nan, "e_P": P_r / P_c if P_c != 0 else math.nan,
-            "e_E": math.sqrt(ratio) if ratio >= 0 else math.nan,
-            "friction_share": W_f / (W_c + W_r + W_f) + 0.0 if W_c + W_r + W_f != 0 else math.nan}
 
 
 @dataclass
@@ -185,93 +94,6 @@ class Columns(Mapping):
 
     def __len__(self) -> int:
         return len(self._index)
-
-
-class Tallied(NamedTuple):
-    """A summary as the C engine tallied it during the run (tally.h's ig_summary, field
-    for field): over the whole run, or over its first impact. NaN where there is nothing to
-    report (t_impact, t_sustained)."""
-
-    T0: float
-    Tf: float
-    delta_T: float
-    delta_max: float
-    delta_r: float
-    P_max: float
-    R_res: float
-    t_contact: float
-    t_impact: float
-    t_sustained: float
-    t_final: float
-    W_normal: float
-    W_friction: float
-    W_gravity: float
-    residual: float
-    n_switches: int
-    n_stick_slip: int
-    impacts: int
-    joint_impacts: int
-    first_point: int  # k for joint k, n for the tip; 0 without an impact
-    v_n0: float  # the first impact's impulses and coefficients (COEFFICIENTS), NaN until it ended
-    P_c: float
-    P_r: float
-    P_t: float
-    e_N: float
-    e_P: float
-    e_E: float
-    friction_share: float
-    y_final: tuple[float, ...]  # q, u, then the works and the impulses
-
-
-_Y_FINAL = len(Tallied._fields) - 1  # y_final, the last field, is the rest of a record's values
-
-
-class SummaryLayout(NamedTuple):
-    """How the C engine's ig_summary record reads, made once per session from its cffi layout."""
-
-    record: Any  # struct.Struct: every field as a Python value, in Tallied's order
-    dtype: np.dtype  # the same record as a numpy structured dtype
-    budget: Any  # struct.Struct: the BUDGET fields alone, in their order
-
-
-class TallyRecords:
-    """The C engine's two summaries (the run's, its first impact's) as the bytes of their C
-    records, each made a `Tallied` when first indexed (a summary reads one of them; a sweep
-    reads one's bytes and its energy budget, and makes no `Tallied`). Pickled as the tuple
-    of both."""
-
-    __slots__ = ("_layout", "_raw", "_made")
-
-    def __init__(self, layout: SummaryLayout, raw: bytes):
-        self._layout, self._raw, self._made = layout, raw, [None, None]
-
-    @property
-    def dtype(self) -> np.dtype:
-        return self._layout.dtype
-
-    def raw(self, k: int) -> bytes:
-        """Summary k as the bytes of its C record (`dtype`)."""
-        size = self._layout.record.size
-        return self._raw[k * size:(k + 1) * size]
-
-    def budget(self, k: int) -> tuple[float, ...]:
-        """The BUDGET fields of summary k (without making its `Tallied`: a sweep's warnings
-        read nothing else of it)."""
-        return self._layout.budget.unpack_from(self._raw, k * self._layout.record.size)
-
-    def __getitem__(self, k: int) -> Tallied:
-        made = self._made[k]
-        if made is None:
-            record = self._layout.record
-            values = record.unpack_from(self._raw, k * record.size)
-            made = self._made[k] = Tallied._make(values[:_Y_FINAL] + (values[_Y_FINAL:],))
-        return made
-
-    def __len__(self) -> int:
-        return 2
-
-    def __reduce__(self):
-        return tuple, ((self[0], self[1]),)
 
 
 def _output(name: str, doc: str) -> property:
@@ -396,8 +218,8 @@ class SimulationResult:
     def first_impact(self) -> dict[str, Any]:
         """The first impact (MODEL section 6), computed on first use and kept."""
         if self.tallied is not None:
-            return _from_tally(self.tallied[1], self.n, self.impact_records)
-        return _first_impact_summary(self)
+            return from_tally(self.tallied[1], self.n, self.impact_records)
+        return first_impact_summary(self)
 
     @property
     def summary(self) -> dict[str, Any]:
@@ -408,7 +230,7 @@ class SimulationResult:
     @cached_property
     def _whole_run(self) -> dict[str, Any]:
         """The summary of a run to a time (or of a failed run)."""
-        return _run_summary(self) if self.tallied is None else _from_tally(self.tallied[0], self.n, self.impact_records)
+        return run_summary(self) if self.tallied is None else from_tally(self.tallied[0], self.n, self.impact_records)
 
     @property
     def summary_tallied(self) -> Tallied | None:
@@ -587,7 +409,7 @@ def _fill_impact_energies(traj: Trajectory, impacts: list[Impact]) -> None:
     for impact in impacts:
         i0 = impact.i_start
         i1 = impact.i_end if impact.i_end is not None else last
-        impact.T_before, impact.T_after, works = _budget(traj, i0, i1)
+        impact.T_before, impact.T_after, works = energy_budget(traj, i0, i1)
         impact.W_normal, impact.W_friction, impact.W_gravity = (
             works["W_normal"], works["W_friction"], works["W_gravity"])
         speed = "v_By" if impact.point == "tip" else f"v_y_J{point_number(impact.point, 0)}"
@@ -616,101 +438,6 @@ def _own_integrals(traj: Trajectory, i: int, point: str) -> dict[str, float]:
         return states
     suffix = f"_J{point_number(point, 0)}"
     return {name[:-len(suffix)]: value for name, value in states.items() if name.endswith(suffix)}
-
-
-def _budget(traj: Trajectory, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:
-    """Kinetic energy at samples i0 and i1, and the energy budget between them."""
-    T, V = traj.outputs["T"], traj.outputs["V"]
-    T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
-    s0, s1 = traj.states_at(i0), traj.states_at(i1)
-    return T0, Tf, energy_balance(T0, Tf, s1["W_normal"] - s0["W_normal"],
-                                  s1.get("W_friction", 0.0) - s0.get("W_friction", 0.0), W_g)
-
-
-def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
-    """The works against the change of T from T0 to Tf, and what it leaves of them (residual)."""
-    return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g, "residual": (Tf - T0) - (W_n + W_f + W_g)}
-
-
-def _first_impact_summary(result: SimulationResult) -> dict[str, Any]:
-    """The first impact as MODEL section 6 lists it, with its energy budget (the whole run
-    when there was no impact). An impact the run ended in has t_contact 0."""
-    tips = tip_impacts(result.impacts)
-    impact = tips[0] if tips else None
-    i0 = impact.i_start if impact else 0
-    i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
-    budget = None  # the impact's energies were read from the same two samples when the result was made
-    if impact is not None:
-        budget = (impact.T_before, impact.T_after, energy_balance(impact.T_before, impact.T_after, impact.W_normal,
-                                                                  impact.W_friction, impact.W_gravity))
-    return _summary(result, i0, i1, [impact] if impact else [], count_open=False, budget=budget)
-
-
-def _run_summary(result: SimulationResult) -> dict[str, Any]:
-    """The whole run, from t = 0 to its last sample: the state it ends in and the energy
-    budget over every impact and flight. Every impact starts from the undeformed surface in
-    this model, so the deepest dent is the largest delta_r (not a sum); t_contact is the
-    total time in contact, an impact the run ends in counted to the end."""
-    return _summary(result, 0, len(result.trajectory.t) - 1, tip_impacts(result.impacts), count_open=True)
-
-
-def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
-             count_open: bool, budget: tuple[float, float, dict[str, float]] | None = None) -> dict[str, Any]:
-    """Samples i0 to i1 and the impacts in them; the switches are the first impact's.
-    `budget`: what `_budget` gives for the two samples, if already known."""
-    traj, n = result.trajectory, result.n
-    T0, Tf, energy = _budget(traj, i0, i1) if budget is None else budget
-    t_last = float(traj.t[i1])
-    first = impacts[0] if impacts else None
-    deepest = max(impacts, key=_dent) if len(impacts) > 1 else first
-    contact = sum((i.t_end if i.t_end is not None else t_last) - i.t_start
-                  for i in impacts if i.t_end is not None or count_open)
-    sustained = _sustained_start(result.phases)
-    tallied = Tallied(
-        T0, Tf, T0 - Tf, max([i.delta_max for i in impacts], default=0.0), deepest.delta_r if deepest else 0.0,
-        max([i.P_max for i in impacts], default=0.0), deepest.R_res if deepest else 0.0, float(contact),
-        first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
-        *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
-        len(first.stick_slip) if first else 0, len(tip_impacts(result.impacts)),
-        sum(i.point != "tip" for i in result.impacts), point_number(result.impacts[0].point, n) if result.impacts else 0,
-        *(getattr(first, name) if first else math.nan for name in COEFFICIENTS), tuple(traj.y[i1].tolist()))
-    return _from_tally(tallied, n, impacts)
-
-
-SUMMARY_LEADING = Tallied._fields[:9]  # T0 .. t_impact: the summary's first entries, in its order
-SUMMARY_LATER = ("impacts", "joint_impacts", "first_point", "t_sustained", "t_final")  # its entries after the final state
-ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy budget, as energy_balance
-BUDGET = ("T0", "Tf", *ENERGY_TERMS)  # what energy_warning reads of a summary, in its order
-
-
-def _from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
-    """A summary dict (MODEL section 6) from its values (as the C engine tallies them, or as
-    `_summary` computes them from the samples); the lists of the first impact's switches
-    from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
-    lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
-    tips = tip_impacts(impacts)  # the tally is the tip's
-    first = tips[0] if tips else None
-    (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
-     W_normal, W_friction, W_gravity, residual, _, _, count, joint_count, first_point, *coefficients, y) = s  # Tallied's fields
-    return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
-            "P_max": P_max, "R_res": R_res, "t_contact": t_contact,
-            "t_impact": None if t_impact != t_impact else t_impact,
-            "switches": _switch_list(first.switches) if first else [],
-            "stick_slip": _switch_list(first.stick_slip) if first and first.stick_slip else [],
-            "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": count,
-            "joint_impacts": joint_count, "first_point": first_point or None,
-            "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": t_final,
-            "energy": {"W_normal": W_normal, "W_friction": W_friction, "W_gravity": W_gravity,
-                       "residual": residual},
-            "coefficients": {name: None if v != v else v for name, v in zip(COEFFICIENTS, coefficients)}}
-
-
-def _dent(impact: Impact) -> float:
-    return impact.delta_r
-
-
-def _sustained_start(phases: list[PhaseSpan]) -> float | None:
-    return next((p.t0 for p in phases if p.phase == "sustained"), None)
 
 
 def _finite(value: Any) -> Any:

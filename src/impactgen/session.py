@@ -1,10 +1,12 @@
-"""The CVODE integrator of a run, reused across runs of a warm process (stage 7, with phases.py).
+"""The C engine's integrator of a run, reused across runs of a warm process (stage 7, with phases.py).
 
-`CvodeSession` owns one `ig_solver` of the C runtime (native/solver.h) and runs the generated
-phase machine on it in C (ig_run), segment after segment, until the machine ends the run,
-the end time or a failure; it hands back the samples (every step, or only each segment's
-end), the segments' records and, for dense output, each step's interpolating polynomial. `likely_cause` turns a CVODE
-message into one that says what to try.
+`EngineSession` owns one `ig_solver` of the C runtime (native/solver.h: CVODE's BDF or Adams,
+the plain-C DOPRI5 pair, ERK, or "auto", which hands a stiff segment from the pair to BDF)
+and runs the generated phase machine on it in C (ig_run), segment after segment, until the
+machine ends the run, the end time or a failure; it hands back the samples (every step, or
+only each segment's end), the switch records and, for dense output, each step's
+interpolating polynomial. `likely_cause` turns an integrator's message into one that says
+what to try.
 """
 from __future__ import annotations
 
@@ -14,12 +16,14 @@ from typing import NamedTuple
 import numpy as np
 
 from .build import CompiledModel
+from .codegen.spec import point_name
 from .errors import SolverError
-from .results import BUDGET, SummaryLayout, Tallied, TallyRecords
+from .records import SwitchRecord, TallyRecords, record_layout, summary_layout, switch_record_layout
 from .scene import EXPLICIT_METHODS, Scene, Solver
+from .summaries import BUDGET
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
-SEGMENT_CAPACITY = 64  # segment records per C call of a run
+RECORD_CAPACITY = 64  # switch records per C call of a run (at least one per contact point)
 SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
 
 
@@ -28,111 +32,53 @@ class Machine:
     actions (MODEL_ACT_* bits) the results read, looked up in the library once."""
 
     def __init__(self, model: CompiledModel, state):
-        lib = model.lib
+        lib, spec = model.lib, model.spec
         self.state = state
-        self.coulomb = model.spec.coulomb
+        self.coulomb = spec.coulomb
         self.free = lib.MODEL_MACHINE_FREE
         self.acts = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP, lib.MODEL_ACT_MAX_COMPRESSION,
                      lib.MODEL_ACT_IMPACT_END)
+        self.points = (*spec.joints, spec.links)  # each contact point's number, in the machine's order (point[k])
+        self.names = {number: point_name(number, spec.links) for number in self.points}
+        self.tip = spec.links  # the chain's end: the point whose phases are the run's
+        self.tip_index = lib.MODEL_TIP_POINT
 
     def slip_label(self, state: int, slip: float) -> str:
         """The stick-slip label of a contact state under exact Coulomb friction, else ""."""
         return SLIP_LABEL[slip] if self.coulomb and state != self.free else ""
 
-
-class Segment(NamedTuple):
-    """One phase segment of a run, as ig_run recorded it (see tally.h's ig_segment)."""
-
-    t: float  # its end
-    sample: int  # index of its last sample in the run's samples (the start is sample 0)
-    state: int  # machine state during it
-    slip: float
-    event: int  # the model event that ended it, -1 at the end time
-    act: int  # MODEL_ACT_* bits of the switch at its end
-    next_state: int
-    next_slip: float
-    delta_max: float
-    P_max: float
-    delta_r: float
-    R_res: float
-    point: int  # the contact point of the record: links (the tip), or a joint 1 to links - 1
-
-
-_CODES = {("double", 8): "d", ("int", 4): "i", ("long", 8): "q", ("long", 4): "i"}  # C scalar -> struct code
-
-
-def _fields(ffi, ctype: str, skip: tuple[str, ...] = ()):
-    """(name, struct code, element count or None for a scalar, offset) of each field of a
-    C struct of doubles, integers and arrays of them, but the `skip` fields."""
-    for name, f in ffi.typeof(ctype).fields:
-        if name in skip:
-            continue
-        item = f.type.item if f.type.kind == "array" else f.type
-        yield name, _CODES[item.cname, ffi.sizeof(item)], f.type.length if f.type.kind == "array" else None, f.offset
-
-
-def record_layout(ffi, ctype: str, skip: tuple[str, ...] = ()) -> str:
-    """The struct-module format of a C struct of doubles, integers and arrays of them (its
-    `skip` fields passed over as pad bytes), laid out as the compiler laid it out: Python
-    values of a whole record in one call, cheaper than a numpy record's."""
-    layout, at = "", 0
-    for name, code, count, offset in _fields(ffi, ctype, skip):
-        layout += "x" * (offset - at) + code * (count or 1)
-        at = offset + struct.calcsize(code) * (count or 1)
-    return layout + "x" * (ffi.sizeof(ctype) - at)
-
-
-def record_dtype(ffi, ctype: str) -> np.dtype:
-    """The same struct as a numpy structured dtype: many records' bytes joined are one array
-    (a sweep's chunk of summaries), with no Python value per field."""
-    names, formats, offsets = [], [], []
-    for name, code, count, offset in _fields(ffi, ctype):
-        names.append(name)
-        formats.append((code, (count,)) if count is not None else code)
-        offsets.append(offset)
-    return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": ffi.sizeof(ctype)})
-
-
-def summary_layout(ffi) -> SummaryLayout:
-    """How an ig_summary record reads: as Python values in Tallied's order (which mirrors the
-    C struct's, y_final last: checked here, once per session), as a numpy dtype, and its
-    energy budget alone."""
-    fields = ffi.typeof("ig_summary").fields
-    if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
-        raise AssertionError(f"results.Tallied does not mirror tally.h's ig_summary: {fields}")
-    others = tuple(name for name in Tallied._fields if name not in BUDGET)
-    if [name for name in Tallied._fields if name in BUDGET] != list(BUDGET):
-        raise AssertionError(f"results.BUDGET is not in ig_summary's order: {BUDGET}")
-    return SummaryLayout(struct.Struct("=" + record_layout(ffi, "ig_summary")), record_dtype(ffi, "ig_summary"),
-                         struct.Struct("=" + record_layout(ffi, "ig_summary", others)))
+    def in_contact(self) -> list[str]:
+        """The points in contact now, in point order, by name."""
+        point, free = self.state.point, self.free
+        return [self.names[number] for k, number in enumerate(self.points) if point[k].state != free]
 
 
 class MachineRun(NamedTuple):
-    """What one `CvodeSession.run` gives back: the samples (rows), the finished segments,
-    ig_run's last return code with the message of a failure, and the time the run stopped."""
+    """What one `EngineSession.run` gives back: the samples (rows), the switch records as C
+    wrote them (every point's, in time order, at one switch in point order), ig_run's last
+    return code with the message of a failure, and the time the run stopped."""
 
     t: np.ndarray
     y: np.ndarray
     outputs: np.ndarray
     dense: np.ndarray | None
-    segments: list[Segment]
-    segment_params: list | None  # a copy of the model_params each segment ran under (cffi), when asked for
+    records: list[SwitchRecord]
+    record_params: list | None  # a copy of the model_params each record's segment ran under (cffi), when asked for
     flag: int
     message: str
     t_last: float
     summaries: TallyRecords  # over the whole run, over its first impact (ig_summarize)
-    joint_records: list[Segment]  # the joints' switches, each at the end of the segment it ended
 
 
-class CvodeSession:
-    """One CVODE integrator for a whole simulation, with the run's C buffers (the phase
-    machine, the tolerances, the samples). `open` reuses an idle one of the same model and
-    method (a warm process then allocates nothing per run); `close` returns it."""
+class EngineSession:
+    """One integrator (the scene's method) for a whole simulation, with the run's C buffers
+    (the phase machine, the tolerances, the samples). `open` reuses an idle one of the same
+    model and method (a warm process then allocates nothing per run); `close` returns it."""
 
-    _idle: dict[tuple, list["CvodeSession"]] = {}  # (model, method) -> sessions not in use
+    _idle: dict[tuple, list["EngineSession"]] = {}  # (model, method) -> sessions not in use
 
     @classmethod
-    def open(cls, model: CompiledModel, solver: Solver) -> "CvodeSession":
+    def open(cls, model: CompiledModel, solver: Solver) -> "EngineSession":
         """An idle session of this model and `solver`'s method, or a new one; `begin` a run on it."""
         key = model.lib, solver.method  # one library per build, hashed by identity
         try:
@@ -158,10 +104,10 @@ class CvodeSession:
         self.atol_now = ffi.new("double[]", model.nstate)
         self.solver = self._new_solver(solver)
         self.dense_terms = int(model.lib.ig_dense_terms(self.solver))
-        self.segments = ffi.new("ig_segment[]", SEGMENT_CAPACITY)
-        self._segment_bytes = ffi.buffer(self.segments)
-        self._segment_record = struct.Struct("=" + record_layout(ffi, "ig_segment", ("params",)))  # as Segment
-        self.n_segments = ffi.new("int *")
+        self.records = ffi.new("ig_segment[]", RECORD_CAPACITY)
+        self._record_bytes = ffi.buffer(self.records)
+        self._record_layout = switch_record_layout(ffi)
+        self.n_records = ffi.new("int *")
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
         self.y0 = np.empty(model.nstate)
@@ -176,7 +122,7 @@ class CvodeSession:
         self.summaries = ffi.new("ig_summary[2]")  # the run's, its first impact's
         self._summary_args = (self.tally, self.summaries, self.summaries + 1)
         self._summary_bytes = ffi.buffer(self.summaries)
-        self._summary_layout = summary_layout(ffi)
+        self._summary_layout = summary_layout(ffi, BUDGET)
         self._alloc()
 
     def _new_solver(self, solver: Solver):
@@ -186,7 +132,7 @@ class CvodeSession:
         err = ffi.new("char[]", 512)
         made = lib.ig_solver_new(self.method, self.analytic, solver.rtol, self.atol_now, solver.max_steps, err, 512)
         if made == ffi.NULL:
-            raise SolverError(f"cannot create the CVODE solver: {ffi.string(err).decode()}")
+            raise SolverError(f"cannot create the integrator: {ffi.string(err).decode()}")
         return ffi.gc(made, lib.ig_solver_free)
 
     def begin(self, params, scene: Scene, solver: Solver) -> int:
@@ -200,12 +146,12 @@ class CvodeSession:
                                             solver.t_end is not None, solver.rtol, solver.atol, solver.max_steps,
                                             self.atol_now, self.t_buf, self.y_buf, self.out_buf, self.tally)
         if start < 0:
-            raise SolverError(f"cannot reset the CVODE solver: {self._message()}")
+            raise SolverError(f"cannot reset the integrator: {self._message()}")
         return start
 
     def _alloc(self) -> None:
         ffi = self.model.ffi
-        self.t_samples = np.empty(self.capacity)  # CVODE writes its steps here
+        self.t_samples = np.empty(self.capacity)  # the integrator writes its steps here
         self.y_samples = np.empty((self.capacity, self.model.nstate))
         self.t_buf = ffi.from_buffer("double[]", self.t_samples)
         self.y_buf = ffi.from_buffer("double[]", self.y_samples)
@@ -225,30 +171,30 @@ class CvodeSession:
         """Run the phase machine (`machine`, started by `begin`) to t_stop in C (ig_run), one
         call per buffer's worth: every step a sample when `every_step`, else only each
         segment's end. The samples begin with the start, sample 0. `with_params` keeps a
-        copy of each segment's parameters (to evaluate outputs between its samples). The
-        run's summaries are tallied in C on the way."""
+        copy of the parameters of each record's segment (to evaluate outputs between its
+        samples). The run's summaries are tallied in C on the way."""
         ffi, lib = self.model.ffi, self.model.lib
         dense = self.dense and every_step
         if dense:
             self.d_samples[0] = 0.0  # the start ends no step: it has no polynomial
         chunks: list[tuple[np.ndarray, ...]] = []
-        segments: list[Segment] = []
-        segment_params: list | None = [] if with_params else None
+        records: list[SwitchRecord] = []
+        record_params: list | None = [] if with_params else None
         base = 0  # samples before this call's buffers
         self.n_out[0] = 1  # the start, written by begin
         while True:
             flag = lib.ig_run(self.solver, self.machine, params, self.t_now, self.y0_c, t_stop, t_stop, atol,
-                              max_segments - len(segments), every_step, self.t_buf, self.y_buf, self.out_buf,
-                              self.d_buf if dense else ffi.NULL, self.capacity, self.n_out, self.segments,
-                              SEGMENT_CAPACITY, self.n_segments, self.tally)
+                              max_segments - len(records), every_step, self.t_buf, self.y_buf, self.out_buf,
+                              self.d_buf if dense else ffi.NULL, self.capacity, self.n_out, self.records,
+                              RECORD_CAPACITY, self.n_records, self.tally)
             k = self.n_out[0]
             chunks.append((self.t_samples[:k].copy(), self.y_samples[:k].copy(), self.out_samples[:k].copy(),
                            self.d_samples[:k].copy() if dense else None))
-            rows = self._segment_record.iter_unpack(self._segment_bytes[:self.n_segments[0] * self._segment_record.size])
-            segments += map(Segment._make, rows if not base else [(r[0], base + r[1]) + r[2:] for r in rows])
+            rows = self._record_layout.iter_unpack(self._record_bytes[:self.n_records[0] * self._record_layout.size])
+            records += map(SwitchRecord._make, rows if not base else [(r[0], base + r[1]) + r[2:] for r in rows])
             if with_params:
                 new = ffi.new
-                segment_params.extend(new("model_params *", self.segments[j].params) for j in range(self.n_segments[0]))
+                record_params.extend(new("model_params *", self.records[j].params) for j in range(self.n_records[0]))
             base += k
             self.n_out[0] = 0
             if flag == lib.IG_BUFFER_FULL and every_step:
@@ -261,15 +207,8 @@ class CvodeSession:
         else:
             t, y, out, d = (np.concatenate(parts) if parts[0] is not None else None for parts in zip(*chunks))
         message = self._message() if flag < 0 else ""
-        joint_records: list[Segment] = []
-        if self.model.spec.joints:  # the segments are the tip's; the joints' switches are records beside them
-            tip = self.model.spec.links
-            if segment_params is not None:
-                segment_params = [q for q, seg in zip(segment_params, segments) if seg.point == tip]
-            joint_records = [seg for seg in segments if seg.point != tip]
-            segments = [seg for seg in segments if seg.point == tip]
-        return MachineRun._make((t, y, out, d, segments, segment_params, int(flag), message, float(self.t_now[0]),
-                          self._summarized(), joint_records))
+        return MachineRun._make((t, y, out, d, records, record_params, int(flag), message, float(self.t_now[0]),
+                                 self._summarized()))
 
     def _summarized(self) -> TallyRecords:
         """The run's two summaries, tallied in C now (the session's buffers serve the next
@@ -298,7 +237,7 @@ class CvodeSession:
 
     def _message(self) -> str:
         text = self.model.ffi.string(self.model.lib.ig_solver_message(self.solver)).decode(errors="replace")
-        return likely_cause(text or "CVODE failed without a message")
+        return likely_cause(text or "the integrator failed without a message")
 
 
 def method_code(lib, method: str) -> int:
@@ -307,13 +246,13 @@ def method_code(lib, method: str) -> int:
 
 
 def uses_jacobian(model: CompiledModel, solver: Solver) -> bool:
-    """Whether CVODE gets the model's analytic Jacobian: the model has one and the method is
-    implicit (the explicit Runge-Kutta pair uses none)."""
+    """Whether the integrator gets the model's analytic Jacobian: the model has one and the
+    method is implicit (the explicit Runge-Kutta methods use none)."""
     return bool(model.spec.jacobian) and solver.method not in EXPLICIT_METHODS
 
 
 def likely_cause(message: str) -> str:
-    """Add to a CVODE message what usually causes it and what to try."""
+    """Add to an integrator's message what usually causes it and what to try."""
     lower = message.lower()
     if "max_steps" in lower:
         hint = ("the phase needs more steps than allowed: raise solver.max_steps, loosen solver.rtol, "

@@ -48,47 +48,41 @@ static int under_floor(ig_solver *s, const model_params *p, double t, const doub
     return 1;
 }
 
-/* The most segment records one switch writes: the tip's, and one per joint that switched. */
-#ifdef MODEL_NJOINT
-#define SWITCH_RECORDS (1 + MODEL_NJOINT)
-#else
-#define SWITCH_RECORDS 1
-#endif
+/* The most switch records one switch writes: one per contact point. */
+#define SWITCH_RECORDS MODEL_NCONTACT
 
-/* A point's machine after its switch, in its switch record. */
-static void record_after(ig_segment *rec, const model_point_machine *r)
-{
-    rec->next_state = r->state;
-    rec->next_slip = r->slip;
-    rec->delta_max = r->delta_max;
-    rec->P_max = r->P_max;
-    rec->delta_r = r->delta_r;
-    rec->R_res = r->R_res;
-}
 
-#ifdef MODEL_NJOINT
-/* After a switch recorded in `seg`: a record of its own for each joint that switched there. */
-static int record_joints(const model_machine *m, const ig_segment *seg, ig_segment *segments, int segment_capacity,
-                         int *n_segments, ig_tally *tally, const double *t_buf, const double *y_buf,
-                         const double *out_buf)
+/* After a switch at (t, sample) that `event` began (the first watched one that fired): a
+ * record of each point whose switch acted, in point order, followed in the tally. `params`:
+ * those the ended segment ran under. Returns 1 when the records do not fit. */
+static int record_switch(const model_machine *m, const model_params *params, double t, long sample, int event,
+                         ig_segment *segments, int segment_capacity, int *n_segments, ig_tally *tally,
+                         const double *t_buf, const double *y_buf, const double *out_buf)
 {
-    for (int k = 0; k < MODEL_NJOINT; ++k) {
-        const model_point_machine *j = &m->point[k];
-        if (!j->act) continue;
+    for (int k = 0; k < MODEL_NCONTACT; ++k) {
+        const model_point_machine *r = &m->point[k];
+        if (!r->act) continue;
         if (*n_segments >= segment_capacity) return 1;
         ig_segment *rec = &segments[(*n_segments)++];
-        *rec = *seg;
-        rec->point = model_joint_number(k);
-        rec->state = j->was;
-        rec->slip = j->was_slip;
-        rec->act = j->act;
-        record_after(rec, j);
+        rec->t = t;
+        rec->sample = sample;
+        rec->point = model_point_number(k);  /* its number in the chain */
+        rec->event = event;
+        rec->act = r->act;
+        rec->state = r->was;
+        rec->slip = r->was_slip;
+        rec->next_state = r->state;
+        rec->next_slip = r->slip;
+        rec->delta_max = r->delta_max;
+        rec->P_max = r->P_max;
+        rec->delta_r = r->delta_r;
+        rec->R_res = r->R_res;
+        rec->params = *params;
         if (tally) ig_tally_segment(tally, rec, t_buf, y_buf, out_buf);
     }
     return 0;
 }
 
-#endif
 /* ig_run's loop over the segments (solver.h); ig_run then notes its last sample in the
  * tally, whichever way the loop returned. */
 static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop,
@@ -159,34 +153,18 @@ static int run_machine(ig_solver *s, model_machine *m, model_params *p, double *
                              "fired; tighten solver.rtol");
             return IG_ERR_STICK;
         }
-        ig_segment *seg = &segments[(*n_segments)++];
-        seg->t = *t;
-        seg->sample = *n_written - 1;
-        const model_point_machine *tip = &m->point[MODEL_TIP_POINT];
-        seg->state = tip->state;
-        seg->slip = tip->slip;
-        seg->params = *p;
-        seg->event = -1;
-        seg->act = 0;
-        int act = 0;  /* what the switch did to the run: the end, new tolerances */
-        if (flag == IG_ROOT) {
-            for (int k = 0; k < s->nevents && seg->event < 0; ++k) {
-                if (roots_found[k]) seg->event = s->events[k];
-            }
-            act = model_machine_switch(m, p, *t, y, roots_found);
-            seg->act = tip->act | (act & MODEL_ACT_END);  /* the tip's own switch */
+        if (flag == IG_REACHED_END) return IG_REACHED_END;  /* t_stop: no switch, no record */
+        int event = -1;
+        for (int k = 0; k < s->nevents && event < 0; ++k) {
+            if (roots_found[k]) event = s->events[k];
         }
-        record_after(seg, tip);  /* the machine after the switch (as it was, at t_stop) */
-        seg->point = MODEL_NQ;
-        if (tally) ig_tally_segment(tally, seg, t_buf, y_buf, out_buf);
-#ifdef MODEL_NJOINT
-        if (flag == IG_ROOT && record_joints(m, seg, segments, segment_capacity, n_segments, tally, t_buf, y_buf,
-                                            out_buf) != 0) {
-            ig_solver_say(s, "ig_run: no room for the joints' switch records (segment_capacity)");
+        const model_params ran_under = *p;  /* the switch changes some */
+        const int act = model_machine_switch(m, p, *t, y, roots_found);
+        if (record_switch(m, &ran_under, *t, *n_written - 1, event, segments, segment_capacity, n_segments, tally,
+                          t_buf, y_buf, out_buf) != 0) {
+            ig_solver_say(s, "ig_run: no room for a switch's records (segment_capacity)");
             return IG_ERR_USAGE;
         }
-#endif
-        if (flag == IG_REACHED_END) return IG_REACHED_END;
         if (act & MODEL_ACT_END) return IG_RUN_DONE;
         if (act & MODEL_ACT_TOLERANCES) {
             model_machine_atol(m, p, s->rtol, atol, atol_now);
@@ -205,13 +183,11 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
     const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
     model_outputs(t0, y_buf, out_buf, p);
     ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
-#ifdef MODEL_NJOINT
-    for (int k = 0; k < MODEL_NJOINT; ++k) {  /* the joints in contact from the start */
-        if (m->point[k].state == MODEL_MACHINE_FREE) continue;
+    for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the joints in contact from the start (the tip: above) */
+        if (model_point_number(k) == MODEL_NQ || m->point[k].state == MODEL_MACHINE_FREE) continue;
         tally->joint_impacts++;
-        if (tally->first_point == 0) tally->first_point = model_joint_number(k);
+        if (tally->first_point == 0) tally->first_point = model_point_number(k);
     }
-#endif
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
     model_machine_atol(m, p, rtol, atol, atol_now);
     const int flag = ig_solver_reset(s, rtol, atol_now, max_steps);

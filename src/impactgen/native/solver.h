@@ -128,8 +128,8 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
  * 1 (dense_buf, if not NULL, as ig_segment_advance), else only each segment's end (no dense
  * output). Returns IG_RUN_DONE when the machine ends the run, IG_REACHED_END at t_stop,
  * IG_TARGET past t_target, IG_BUFFER_FULL or IG_SEGMENTS_FULL when the buffers hold capacity
- * samples or segment_capacity segments are written (call again with emptied buffers to
- * continue), or < 0 on a failure (ig_solver_message says why; the samples up to it are
+ * samples or segment_capacity switch records could not hold another switch's (call again with
+ * emptied buffers to continue), or < 0 on a failure (ig_solver_message says why; the samples up to it are
  * written): IG_ERR_STICK when a stuck tip needed more than mu F (a slip event was missed),
  * IG_ERR_UNDER_FLOOR when a joint or the tip is found below the surface by more than
  * MODEL_FLOOR_DEPTH of the shortest link at the start of the call or after a step (the floor
@@ -137,8 +137,10 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
  * there is written).
  * *n_written: the samples already in the buffers on entry (1 after ig_run_begin wrote the
  * start; 0 in emptied buffers), written after, and less than capacity (IG_ERR_USAGE
- * otherwise); on return, the samples in them (segments[k].sample indexes them). At most
- * max_segments segments begin in one call.
+ * otherwise); on return, the samples in them (segments[k].sample indexes them).
+ * segments: the switch records (tally.h's ig_segment: one per point whose switch acted, in
+ * point order; none at t_stop), *n_segments of them on return; segment_capacity at least
+ * MODEL_NCONTACT. At most max_segments segments begin in one call.
  * tally, if not NULL (begun with ig_tally_begin), follows the run for ig_summarize. */
 int ig_run(ig_solver *s, model_machine *m, model_params *p, double *t, double *y, double t_stop, double t_target,
            double atol, long max_segments, int every_step,

@@ -70,7 +70,6 @@ void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *
     memset(tally, 0, sizeof *tally);
     ig_read_point(&tally->start, t0, y0, out0);
     tally->last = tally->start;
-    tally->segment_start = t0;
     tally->t_sustained = NAN;
     if (in_contact) {
         tally->first_point = MODEL_NQ;
@@ -93,19 +92,22 @@ static void fold_impact(ig_tally *a, double contact, int first_folded)
     a->t_contact += contact;
 }
 
-/* Follow one finished segment (its end is sample k of the buffers) in the tally. */
+/* Follow one switch record (at sample seg->sample of the buffers) in the tally: the tip's make
+ * the summaries, the joints' are counted. */
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
                           const double *out_buf)
 {
     if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && a->first_point == 0) a->first_point = seg->point;
-    if (seg->point != MODEL_NQ) {  /* a joint's switch: counted; the summaries are the tip's */
+    if (seg->point != MODEL_NQ) {  /* a joint's: counted; the summaries are the tip's (the chain's end) */
         if (seg->act & MODEL_ACT_IMPACT_BEGIN) a->joint_impacts++;
         return;
     }
     const long k = seg->sample;
     const double *y = y_buf + (size_t)k * MODEL_NSTATE, *out = out_buf + (size_t)k * MODEL_NOUT;
-    if (seg->state == MODEL_MACHINE_SUSTAINED && isnan(a->t_sustained)) a->t_sustained = a->segment_start;
-    a->segment_start = seg->t;
+    if (seg->next_state == MODEL_MACHINE_SUSTAINED && seg->state != MODEL_MACHINE_SUSTAINED &&
+        isnan(a->t_sustained)) {
+        a->t_sustained = seg->t;
+    }
     if (seg->act & MODEL_ACT_IMPACT_BEGIN) {
         if (++a->impacts == 1) ig_read_point(&a->first_begin, t_buf[k], y, out);
         a->now_start = seg->t;

@@ -1,7 +1,7 @@
 /*
  * tally.h: what a run keeps for its summaries while ig_run goes from segment to segment
- * (tally.c): the records a summary reads, begun at the run's first sample, followed segment
- * by segment, summarized at the end.
+ * (tally.c): the records a summary reads, begun at the run's first sample, followed switch
+ * record by switch record, summarized at the end; and the switch record itself (ig_segment).
  */
 #ifndef IMPACTGEN_TALLY_H
 #define IMPACTGEN_TALLY_H
@@ -10,22 +10,25 @@
 #include "model_machine.h"
 
 /* cdef-begin: the declarations below are read by cffi as they stand. */
-/* One phase segment of ig_run: the machine state it ran in, how it ended, what the switch
- * at its end did, and the parameters it ran under (the machine changes some at a switch). */
+/* One switch record of ig_run: contact point `point`'s segment (the time it spent in one
+ * machine state and stick-slip state) ended at t, at the switch that event `event` began, and
+ * its switch did `act`, from (state, slip) to (next_state, next_slip). A switch writes one
+ * record per point whose switch acted, in point order (the joints by number, then the tip),
+ * each once; the records of one switch share t, sample, event and params. A point that did not
+ * switch has no record: it stays in the state its last record went to. Reaching t_stop is no
+ * switch: a run's last segment has no record (its points are as the machine is at the end). */
 typedef struct {
-    double t;            /* its end, s */
-    long sample;         /* index of its last sample in the buffers of the ig_run call */
-    int state;           /* MODEL_MACHINE_* during the segment */
-    double slip;         /* the stick-slip state during it (model_machine.slip) */
-    int event;           /* the model event that ended it (the first watched one fired); -1: t_stop */
-    int act;             /* MODEL_ACT_* bits of the switch at its end (0 at t_stop) */
-    int next_state;      /* the machine state after the switch */
+    double t;            /* the switch's time, s */
+    long sample;         /* index of the sample at t in the buffers of the ig_run call */
+    int state;           /* MODEL_MACHINE_* of the point before the switch (model_point_machine.was) */
+    double slip;         /* its stick-slip state before it (was_slip: +1, -1 slipping, 0 stuck) */
+    int event;           /* the model event that began the switch (the first watched one that fired) */
+    int act;             /* MODEL_ACT_* bits of the point's switch (model_point_machine.act, never 0) */
+    int next_state;      /* the point's machine state after the switch */
     double next_slip;
-    double delta_max, P_max, delta_r, R_res;  /* the machine's impact record after the switch */
-    int point;           /* the contact point the record is of: MODEL_NQ the tip, 1 to MODEL_NQ - 1 a
-                            joint (a joint's switch is a record of its own, at the end of the
-                            segment it ended: state, act, next_state and the impact record its) */
-    model_params params; /* the parameters during the segment */
+    double delta_max, P_max, delta_r, R_res;  /* the point's impact record after the switch */
+    int point;           /* the point: 1 to MODEL_NQ - 1 joint k (the end of link k), MODEL_NQ the tip */
+    model_params params; /* the parameters the run's segment ending at t ran under (the switch changes some) */
 } ig_segment;
 
 /* The values at one sample that a summary reads: time, kinetic and potential energy, the
@@ -56,8 +59,7 @@ typedef struct {
     double delta_max, P_max, deepest_delta_r, deepest_R_res;  /* over the ended impacts: the
                                                                  largest, and the deepest dent's */
     double t_contact;                 /* contact time of the ended impacts, s */
-    double segment_start;             /* when the current segment began, s */
-    double t_sustained;               /* when sustained contact first began, s; NAN if never */
+    double t_sustained;               /* when sustained contact first began (the tip switched into it), s; NAN if never */
     ig_point first_max;               /* the first impact's (latest) maximum compression */
     int first_compressed;             /* whether the first impact reached maximum compression */
 } ig_tally;
@@ -97,7 +99,7 @@ void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impa
 /* The values a summary reads at one sample (t, y with its outputs out). */
 void ig_read_point(ig_point *point, double t, const double *y, const double *out);
 
-/* Follow one finished segment (its end is sample seg->sample of the buffers) in the tally. */
+/* Follow one switch record (at sample seg->sample of the buffers) in the tally. */
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
                       const double *out_buf);
 

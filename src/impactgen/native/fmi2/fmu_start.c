@@ -68,30 +68,16 @@ fmi2Status fmu_refuse_input(fmu_instance *c, int k, const char *range)
     return fmu_fail(c, "%s", what);
 }
 
-/* Whether the tip starts inside the surface (its depth in *depth, m). After fmu_prepare: the
- * heights of model_heights are above the surface level p.point[MODEL_TIP_POINT].y_s; the
- * touch tolerance is model_machine_start_inside's, which finds the first point inside but
- * the scene names the tip first. */
-static int tip_inside(const fmu_instance *c, double *depth)
-{
-    double h[MODEL_NPOINT];
-    model_heights(c->y, h, &c->p);
-    *depth = -h[MODEL_NPOINT - 1];
-    return *depth > MODEL_TOUCH_TOLERANCE * fmax(1.0, model_chain_length(&c->p));
-}
-
-/* A point of the chain inside the surface, named as load_scene names it
- * (scene/physics.py): the tip inside a surface set by its height names surface.height (the
- * scene checks the tip first); else the first point from the pivot (point: 0 the pivot, k
- * joint k, as model_machine_start_inside finds it) names initial.q and the link it ends. */
+/* A point of the chain inside the surface (model_machine_start_inside's), named as load_scene
+ * names it (scene/physics.py): the tip names surface.height; the pivot (0) or joint k names
+ * initial.q and the link it ends. */
 static void log_start_inside(const fmu_instance *c, int point, double depth)
 {
     const double y_s = c->p.point[MODEL_TIP_POINT].y_s;
-    double tip = depth;
-    if (point == MODEL_NQ || (c->p.surface_initial == 0.0 && tip_inside(c, &tip))) {
+    if (point == MODEL_NQ) {
         fmu_say(c, fmi2Error, "logStatusError", "surface.height: the tip of link %d starts %.3g m inside the "
                 "surface (tip at y = %.6g m, surface at %.6g m); lower the surface or change initial.q",
-                MODEL_NQ, tip, y_s - tip, y_s);
+                MODEL_NQ, depth, y_s - depth, y_s);
         return;
     }
     char where[64];

@@ -1,0 +1,110 @@
+"""The summaries of a result (MODEL section 6): the whole run's and its first impact's, with
+their energy budgets, as dicts. The C engine tallies them during the run (records.Tallied,
+read by `from_tally`); the reference engine's are computed from its samples (`run_summary`,
+`first_impact_summary`), field for field the same.
+"""
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+from .codegen.spec import point_number
+from .impacts import COEFFICIENTS, Impact, PhaseSpan, switch_list, tip_impacts
+from .records import Tallied
+
+if TYPE_CHECKING:  # (annotations only: results.py imports this module)
+    from .results import SimulationResult, Trajectory
+
+SUMMARY_LEADING = Tallied._fields[:9]  # T0 .. t_impact: the summary's first entries, in its order
+SUMMARY_LATER = ("impacts", "joint_impacts", "first_point", "t_sustained", "t_final")  # its entries after the final state
+ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy budget, as energy_balance
+BUDGET = ("T0", "Tf", *ENERGY_TERMS)  # what energy_warning reads of a summary, in its order
+
+
+def energy_budget(traj: Trajectory, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:
+    """Kinetic energy at samples i0 and i1, and the energy budget between them."""
+    T, V = traj.outputs["T"], traj.outputs["V"]
+    T0, Tf, W_g = float(T[i0]), float(T[i1]), float(V[i0]) - float(V[i1])
+    s0, s1 = traj.states_at(i0), traj.states_at(i1)
+    return T0, Tf, energy_balance(T0, Tf, s1["W_normal"] - s0["W_normal"],
+                                  s1.get("W_friction", 0.0) - s0.get("W_friction", 0.0), W_g)
+
+
+def energy_balance(T0: float, Tf: float, W_n: float, W_f: float, W_g: float) -> dict[str, float]:
+    """The works against the change of T from T0 to Tf, and what it leaves of them (residual)."""
+    return {"W_normal": W_n, "W_friction": W_f, "W_gravity": W_g, "residual": (Tf - T0) - (W_n + W_f + W_g)}
+
+
+def first_impact_summary(result: SimulationResult) -> dict[str, Any]:
+    """The first impact as MODEL section 6 lists it, with its energy budget (the whole run
+    when there was no impact). An impact the run ended in has t_contact 0."""
+    tips = tip_impacts(result.impacts)
+    impact = tips[0] if tips else None
+    i0 = impact.i_start if impact else 0
+    i1 = impact.i_end if impact and impact.i_end is not None else len(result.trajectory.t) - 1
+    budget = None  # the impact's energies were read from the same two samples when the result was made
+    if impact is not None:
+        budget = (impact.T_before, impact.T_after, energy_balance(impact.T_before, impact.T_after, impact.W_normal,
+                                                                  impact.W_friction, impact.W_gravity))
+    return _summary(result, i0, i1, [impact] if impact else [], count_open=False, budget=budget)
+
+
+def run_summary(result: SimulationResult) -> dict[str, Any]:
+    """The whole run, from t = 0 to its last sample: the state it ends in and the energy
+    budget over every impact and flight. Every impact starts from the undeformed surface in
+    this model, so the deepest dent is the largest delta_r (not a sum); t_contact is the
+    total time in contact, an impact the run ends in counted to the end."""
+    return _summary(result, 0, len(result.trajectory.t) - 1, tip_impacts(result.impacts), count_open=True)
+
+
+def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
+             count_open: bool, budget: tuple[float, float, dict[str, float]] | None = None) -> dict[str, Any]:
+    """Samples i0 to i1 and the impacts in them; the switches are the first impact's.
+    `budget`: what `energy_budget` gives for the two samples, if already known."""
+    traj, n = result.trajectory, result.n
+    T0, Tf, energy = energy_budget(traj, i0, i1) if budget is None else budget
+    t_last = float(traj.t[i1])
+    first = impacts[0] if impacts else None
+    deepest = max(impacts, key=_dent) if len(impacts) > 1 else first
+    contact = sum((i.t_end if i.t_end is not None else t_last) - i.t_start
+                  for i in impacts if i.t_end is not None or count_open)
+    sustained = _sustained_start(result.phases)
+    tallied = Tallied(
+        T0, Tf, T0 - Tf, max([i.delta_max for i in impacts], default=0.0), deepest.delta_r if deepest else 0.0,
+        max([i.P_max for i in impacts], default=0.0), deepest.R_res if deepest else 0.0, float(contact),
+        first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
+        *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
+        len(first.stick_slip) if first else 0, len(tip_impacts(result.impacts)),
+        sum(i.point != "tip" for i in result.impacts), point_number(result.impacts[0].point, n) if result.impacts else 0,
+        *(getattr(first, name) if first else math.nan for name in COEFFICIENTS), tuple(traj.y[i1].tolist()))
+    return from_tally(tallied, n, impacts)
+
+
+def from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
+    """A summary dict (MODEL section 6) from its values (as the C engine tallies them, or as
+    `_summary` computes them from the samples); the lists of the first impact's switches
+    from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
+    lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
+    tips = tip_impacts(impacts)  # the tally is the tip's
+    first = tips[0] if tips else None
+    (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
+     W_normal, W_friction, W_gravity, residual, _, _, count, joint_count, first_point, *coefficients, y) = s  # Tallied's fields
+    return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
+            "P_max": P_max, "R_res": R_res, "t_contact": t_contact,
+            "t_impact": None if t_impact != t_impact else t_impact,
+            "switches": switch_list(first.switches) if first else [],
+            "stick_slip": switch_list(first.stick_slip) if first and first.stick_slip else [],
+            "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": count,
+            "joint_impacts": joint_count, "first_point": first_point or None,
+            "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": t_final,
+            "energy": {"W_normal": W_normal, "W_friction": W_friction, "W_gravity": W_gravity,
+                       "residual": residual},
+            "coefficients": {name: None if v != v else v for name, v in zip(COEFFICIENTS, coefficients)}}
+
+
+def _dent(impact: Impact) -> float:
+    return impact.delta_r
+
+
+def _sustained_start(phases: list[PhaseSpan]) -> float | None:
+    return next((p.t0 for p in phases if p.phase == "sustained"), None)
