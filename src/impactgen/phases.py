@@ -1,6 +1,6 @@
-"""Stage 7 of the pipeline: run the generated C phase machine on the C integrators' root finding.
+"""Stage 7 of the pipeline: run the C phase machine on the C integrators' root finding.
 
-The machine (model_machine.c, printed from templates/machine.c.j2) decides everything of
+The machine (native/model_machine.c, plain C written once for every model) decides everything of
 MODEL section 4: which force law and which events with directions each machine state has,
 and what each switch records (delta_m, P_m, delta_r, R_res, stick/slip, sustained contact,
 lift-off, later impacts). Its loop runs in C (ig_run in the glue, through session.py): a

@@ -24,7 +24,6 @@ from .summaries import BUDGET
 
 FIRST_BUFFER = 1024  # samples; doubled while a run keeps filling it
 RECORD_CAPACITY = 64  # switch records per C call of a run (at least one per contact point)
-SLIP_LABEL = {+1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
 
 
 class Machine:
@@ -34,7 +33,6 @@ class Machine:
     def __init__(self, model: CompiledModel, state):
         lib, spec = model.lib, model.spec
         self.state = state
-        self.coulomb = spec.coulomb
         self.free = lib.MODEL_MACHINE_FREE
         self.acts = (lib.MODEL_ACT_IMPACT_BEGIN, lib.MODEL_ACT_SLIP, lib.MODEL_ACT_MAX_COMPRESSION,
                      lib.MODEL_ACT_IMPACT_END)
@@ -42,10 +40,14 @@ class Machine:
         self.names = {number: point_name(number, spec.links) for number in self.points}
         self.tip = spec.links  # the chain's end: the point whose phases are the run's
         self.tip_index = lib.MODEL_TIP_POINT
+        # the C machine's labels (model_machine_slip_name) of a point in contact, read once
+        in_contact = lib.MODEL_MACHINE_ELASTIC
+        self.slip_labels = {slip: model.ffi.string(lib.model_machine_slip_name(in_contact, slip)).decode()
+                            for slip in (+1.0, -1.0, 0.0)}
 
     def slip_label(self, state: int, slip: float) -> str:
         """The stick-slip label of a contact state under exact Coulomb friction, else ""."""
-        return SLIP_LABEL[slip] if self.coulomb and state != self.free else ""
+        return self.slip_labels[slip] if state != self.free else ""
 
     def in_contact(self) -> list[str]:
         """The points in contact now, in point order, by name."""

@@ -8,7 +8,6 @@
  * (model_pruned_reach: the FMU has no contact law for it). Each refusal names the scene key
  * and what to do.
  */
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
