@@ -490,11 +490,15 @@ int model_machine_start_inside(const model_params *p, const double *y, double *d
     const double y_tip = h[MODEL_NPOINT - 1] + p->point[TIP].y_s;  /* heights above the pivot */
     const double y_s = p->surface_initial != 0.0 ? y_tip : p->surface_height;
     const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, model_chain_length(p));
+    if (y_s - y_tip > slack) {  /* the tip first, as the scene checks it (a surface set by its height) */
+        *depth = y_s - y_tip;
+        return MODEL_NQ;
+    }
     if (y_s > slack) {  /* the pivot, at height 0 */
         *depth = y_s;
         return 0;
     }
-    for (int k = 0; k < MODEL_NPOINT; ++k) {
+    for (int k = 0; k < MODEL_NPOINT - 1; ++k) {  /* the joints */
         const double below = y_s - (h[k] + p->point[TIP].y_s);
         if (below > slack) {
             *depth = below;

@@ -145,10 +145,11 @@ const char *model_machine_slip_name(int state, double slip);
  * that joint, MODEL_NQ: the tip; model_heights' order) found deeper below the surface than
  * MODEL_FLOOR_DEPTH of the shortest link, with its depth in *depth, m; 0 when none is. */
 int model_machine_below(const model_params *p, const double *y, double *depth);
-/* The start check: the first point of the chain, from the pivot (0) through the joints to
- * the tip (MODEL_NQ), that starts inside the surface deeper than MODEL_TOUCH_TOLERANCE of the
- * chain's length (at least 1 m), with its depth in *depth, m; -1 when every point starts on
- * or above it (the joints and the tip may touch it). The surface is p->surface_height, or the
+/* The start check: a point of the chain that starts inside the surface deeper than
+ * MODEL_TOUCH_TOLERANCE of the chain's length (at least 1 m), with its depth in *depth, m: the
+ * tip (MODEL_NQ) if it is, else the first from the pivot (0) through the joints (1 to
+ * MODEL_NQ - 1); -1 when every point starts on or above it (the joints and the tip may touch
+ * it). The surface is p->surface_height, or the
  * tip's height when p->surface_initial is set (the scene checks refuse the same starts). */
 int model_machine_start_inside(const model_params *p, const double *y, double *depth);
 /* cdef-end */
