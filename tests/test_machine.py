@@ -149,7 +149,8 @@ def test_the_embedding_guide_lists_the_parameter_table():
     ((-30.0, 90.0), -0.49, 1),           # joint 1 below the surface, the tip above it
     ((-30.0, 80.0), None, 0),            # surface "initial": the tip high, the pivot under it
     ((20.0, 0.0), -0.1, -1),             # every point above the surface
-    ((-70.0, -60.0), 0.2, 0),            # the pivot under the surface
+    ((-70.0, -60.0), 0.2, 2),            # the pivot and the tip under the surface: the tip named first
+    ((80.0, 80.0), 0.2, 0),              # the pivot under the surface, the chain above it
 ])
 def test_the_c_start_check_refuses_what_the_scene_check_refuses(paper_scene, q_deg, height, expected):
     """model_machine_start_inside (what the FMU and the C driver run) names the same first
