@@ -17,14 +17,9 @@
 #define USE_JACOBIAN (MODEL_HAS_JACOBIAN && IG_METHOD_USES_JACOBIAN(MODEL_SCENE_METHOD))
 #define STOP_SLACK 1e-9  /* a last step may pass the stop time by this much (relative): rounding of t + h */
 #define RUN_CAPACITY 8   /* samples per ig_run call of fmi2DoStep */
-#ifdef MODEL_NJOINT
-#define FMU_NJOINT MODEL_NJOINT  /* the joints with contact code */
-#else
-#define FMU_NJOINT 0
-#endif
-/* segment records per ig_run call: a switch writes one for the tip and one per joint that
- * switched (run.c) */
-#define RUN_SEGMENTS (RUN_CAPACITY * (1 + FMU_NJOINT))
+/* switch records per ig_run call: a switch writes one per contact point whose switch acted
+ * (run.c, SWITCH_RECORDS) */
+#define RUN_SEGMENTS (RUN_CAPACITY * MODEL_NCONTACT)
 #define MAX_SEGMENTS 100000  /* phase segments within one fmi2DoStep (chattering impacts beyond) */
 
 fmi2Status fmu_start_stepping(fmu_instance *c)
