@@ -222,7 +222,9 @@ def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
 
 
 @pytest.mark.parametrize("spec", [ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
-                                  ModelSpec(3, "hertz", "none", True, joints=(2,))], ids=lambda s: s.slug)
+                                  ModelSpec(3, "hertz", "none", True, joints=(2,)),
+                                  ModelSpec(3, "three-phase", "regularized", True, True, joints=(1, 2))],
+                         ids=lambda s: s.slug)
 def test_analytic_jacobian_covers_every_contact_point(spec):
     """Every contact point's force enters the equations as J^T (F_f, F), and the analytic
     Jacobian follows each of them: the joints and the tip all in contact at once, against
@@ -255,12 +257,21 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
         scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
         assert np.abs(fd[n:2 * n]).max() > 1e3  # the contact forces dominate the accelerations
         assert np.all(np.abs(J - fd)[:, :2 * n] <= 1e-5 * scale + 1e-9), phase
-        # the right-hand side in two parts (the motion's, the quadratures') is the whole one
-        y_c = ffi.new("double[]", list(y))
-        whole, motion = ffi.new("double[]", N), ffi.new("double[]", 2 * n)
-        quadratures = ffi.new("double[]", N - 2 * n)
-        assert lib.model_rhs(0.0, y_c, whole, p) == 0
-        assert lib.model_motion_rhs(0.0, y_c, motion, p) == 0
-        assert lib.model_quadratures(0.0, y_c, quadratures, p) == 0
-        assert list(motion) + list(quadratures) == list(whole), phase
-        assert np.abs(list(quadratures)).max() > 1.0  # the points' forces are in them
+        _assert_split_rhs(model, y, p)
+    if spec.sustained:  # a point held by a constraint force (resting): the quadratures take it too
+        p.point[0].phase = lib.MODEL_PHASE_SUSTAINED
+        _assert_split_rhs(model, y, p)
+
+
+def _assert_split_rhs(model, y: np.ndarray, p) -> None:
+    """The right-hand side in two parts, the motion's and the quadratures' (the works and
+    impulses, which BDF integrates outside its Newton iteration), is the whole one."""
+    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.links
+    y_c = ffi.new("double[]", list(y))
+    whole, motion = ffi.new("double[]", N), ffi.new("double[]", 2 * n)
+    quadratures = ffi.new("double[]", N - 2 * n)
+    assert lib.model_rhs(0.0, y_c, whole, p) == 0
+    assert lib.model_motion_rhs(0.0, y_c, motion, p) == 0
+    assert lib.model_quadratures(0.0, y_c, quadratures, p) == 0
+    assert list(motion) + list(quadratures) == list(whole)
+    assert np.abs(list(quadratures)).max() > 1.0  # the points' forces are in them
