@@ -168,7 +168,10 @@ static int step(ig_stepper *st, double *t_now, double *y, int *roots_found)
     memcpy(y, N_VGetArrayPointer(c->y), sizeof(double) * (size_t)c->m);
     if (c->nquad) {  /* the quadratures at the time CVode returned (a root's, the stop time) */
         sunrealtype t_quad;
-        if (CVodeGetQuad(c->cvode, &t_quad, c->yQ) != CV_SUCCESS) return IG_STEP_FAILED;
+        if (CVodeGetQuad(c->cvode, &t_quad, c->yQ) != CV_SUCCESS) {
+            ig_stepper_say(st->problem, "CVodeGetQuad failed at t = %g", t);
+            return IG_STEP_FAILED;
+        }
         memcpy(y + c->m, N_VGetArrayPointer(c->yQ), sizeof(double) * (size_t)c->nquad);
     }
     if (flag == CV_ROOT_RETURN) {
