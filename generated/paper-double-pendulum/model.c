@@ -342,7 +342,9 @@ int model_quadratures(double t, const double *y, double *qdot, const model_param
     double trig[4];
     trig_of(y, trig);
     contact_forces c;
-    for (int k = 0; k < NCONTACT; ++k) {  /* each point in contact under its own law, as accelerations finds it */
+    /* else each point in contact under its own law, as accelerations finds it (without Kane's
+     * equations: a third of the cost) */
+    for (int k = 0; k < NCONTACT; ++k) {
         point_motion m;
         c.point[k] = NO_FORCES;
         if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
