@@ -380,8 +380,8 @@ int model_quadratures(double t, const double *y, double *qdot, const model_param
     double trig[6];
     trig_of(y, trig);
     contact_forces c;
-    /* else each point in contact under its own law, as accelerations finds it (without Kane's
-     * equations: a third of the cost) */
+    /* each point in contact under its own law, as accelerations finds it, without
+     * Kane's equations (half the cost of the quadratures on the falling chain) */
     for (int k = 0; k < NCONTACT; ++k) {
         point_motion m;
         c.point[k] = NO_FORCES;
