@@ -3,11 +3,12 @@
  * segment start (the force law changes at a phase switch, so the step history must not be
  * carried across). Supports SUNDIALS 6.x and 7.x.
  *
- * The problem's quadratures (the works and impulses) are CVODES quadratures: integrated after
- * each step's corrector has converged, outside the Newton iteration, whose matrix is then of
- * the motion only (12 x 12 instead of 36 x 36 for the six-link falling chain, where the dense
- * LU of the whole state took a third of the run). CVODES, not CVODE: the two define the same
- * symbols, and CVODE has no quadratures.
+ * The problem's quadratures (the works and impulses), when there are many, are CVODES
+ * quadratures: integrated after each step's corrector has converged, outside the Newton
+ * iteration, whose matrix is then of the motion only (12 x 12 instead of 36 x 36 for the
+ * six-link falling chain, where the dense LU of the whole state took a third of the run; see
+ * IG_QUADRATURES_APART). CVODES, not CVODE: the two define the same symbols, and CVODE has no
+ * quadratures.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,6 +29,15 @@
 #define BDF_MAX_ORDER 5
 #define ADAMS_MAX_ORDER 12
 #define MAX_FAILS 50  /* error test and nonlinear convergence failures allowed in one step */
+/* The quadratures leave the Newton system when there are at least this many: CVODES's
+ * quadratures cost about 3000 instructions a step of their own (vector operations, the
+ * quadratures' right-hand side, CVodeGetQuad), and the error test then takes the max of the
+ * motion's and the quadratures' norms, which took up to 13 % more steps. Callgrind, BDF, whole
+ * runs: the six-link falling chain (24 quadratures, 36 states) 1.14e9 instructions apart
+ * against 1.62e9 on main with them in (1.42x; the dense LU of 36 x 36 was a third); three
+ * links with both joints (12 of 18) 30.8e6 either way; two links with a joint (8 of 12)
+ * 13.8e6 apart, 11.3e6 in; the paper's case (4 of 8) 6.1e6 apart, 4.7e6 in. */
+#define IG_QUADRATURES_APART 16
 
 typedef struct {
     ig_stepper base;
@@ -74,9 +84,10 @@ static int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *u
     (void)fy; (void)tmp1; (void)tmp2; (void)tmp3;
     const cvode_stepper *c = (const cvode_stepper *)user_data;
     const ig_problem *pb = c->base.problem;
-    const int n = c->m;
+    const int n = pb->n - pb->nquad;  /* the problem's Jacobian: of the states before the quadratures */
     const int flag = pb->jacobian(t, N_VGetArrayPointer(y), c->jac, pb->user);
     if (flag != 0) return flag;
+    if (n < c->m) SUNMatZero(J);  /* the quadratures in the Newton system: their rows and columns 0 */
     for (int j = 0; j < n; ++j) {
         sunrealtype *column = SUNDenseMatrix_Column(J, j);
         for (int i = 0; i < n; ++i) column[i] = c->jac[i * n + j];
@@ -249,8 +260,8 @@ ig_stepper *ig_cvode_new(const ig_problem *problem, int adams, char *err, int er
     c->base.ops = &cvode_ops;
     c->base.problem = problem;
     c->base.dense_terms = (adams ? ADAMS_MAX_ORDER : BDF_MAX_ORDER) + 1;
-    /* the quadratures apart when the problem gives its two parts */
-    c->nquad = problem->nquad > 0 && problem->motion && problem->quadratures ? problem->nquad : 0;
+    /* the quadratures apart when the problem gives its two parts and has enough of them */
+    c->nquad = problem->nquad >= IG_QUADRATURES_APART && problem->motion && problem->quadratures ? problem->nquad : 0;
     c->m = problem->n - c->nquad;
     const int n = c->m;
     c->dirs = (int *)calloc((size_t)problem->max_events + 1, sizeof(int));
@@ -303,7 +314,8 @@ ig_stepper *ig_cvode_new(const ig_problem *problem, int adams, char *err, int er
         else if (CVodeSetQuadErrCon(c->cvode, SUNTRUE) != CV_SUCCESS) failed = "CVodeSetQuadErrCon failed";
     }
     if (!failed && problem->jacobian) {
-        c->jac = (double *)malloc(sizeof(double) * (size_t)n * (size_t)n);
+        const size_t m = (size_t)(problem->n - problem->nquad);
+        c->jac = (double *)malloc(sizeof(double) * m * m);
         if (!c->jac) failed = "out of memory";
         else if (CVodeSetJacFn(c->cvode, jacobian) != CV_SUCCESS) failed = "CVodeSetJacFn failed";
         else c->analytic_in_use = 1;
