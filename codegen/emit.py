@@ -262,8 +262,9 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         motion = c_block([(f"m->{r.name}", t(r.expr)) for r in pm.motion], "pm")
         entry = {"k": k, "number": pm.number, "tip": pm.number == n, "kernel": _kernel(model, [motion])}
         if spec.jacobian:
-            curvature = c_block([(f"c->{r.name}", t(r.expr)) for r in pm.curvature
-                                 if spec.has_friction or not r.name.startswith(("Hx", "dv_x"))], "pc")
+            # the Jacobian is of the motion only (the works are quadratures): dv_y is not read
+            curvature = c_block([(f"c->{r.name}", t(r.expr)) for r in pm.curvature if not r.name.startswith("dv_y")
+                                 and (spec.has_friction or not r.name.startswith(("Hx", "dv_x")))], "pc")
             entry["curvature"] = _kernel(model, [curvature])
         points.append(entry)
 
@@ -405,7 +406,7 @@ def generate_model(spec: ModelSpec, prefix: str = "model") -> GeneratedModel:
         spec=spec,
         prefix=prefix,
         header=_tidy(env.get_template("model.h.j2").render(ctx)),
-        source=_tidy(env.get_template("model.c.j2").render(ctx)),
+        source=_tidy(env.get_template("model.c.j2").render(ctx) + env.get_template("model_jacobian.c.j2").render(ctx)),
         params_source=_tidy(env.get_template("model_params.c.j2").render(ctx)),
         cdef=_tidy(env.get_template("cdef.h.j2").render(context.mapping(cdef=True))),
         state_names=model.state_names,

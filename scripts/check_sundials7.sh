@@ -42,7 +42,7 @@ dpkg-deb -x "$work/dev.deb" "$work/root"
 prefix="$work/sundials"
 mkdir -p "$prefix/lib"
 ln -s "$work/root/usr/include" "$prefix/include"
-for lib in core cvode arkode nvecserial sunmatrixdense sunlinsoldense; do
+for lib in core cvodes arkode nvecserial sunmatrixdense sunlinsoldense; do
     cp "$work/root/usr/lib/x86_64-linux-gnu/libsundials_$lib.a" "$prefix/lib/"
 done
 grep -m1 '#define SUNDIALS_VERSION ' "$prefix/include/sundials/sundials_config.h"

@@ -1,22 +1,22 @@
 #!/usr/bin/env bash
-# Install everything impactgen needs on a fresh Debian/Ubuntu machine: SUNDIALS CVODE, a C
+# Install everything impactgen needs on a fresh Debian/Ubuntu machine: SUNDIALS CVODES, a C
 # compiler and the Python headers (apt-get), then a virtual environment with impactgen.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV=${VENV:-.venv}
 PYTHON=${PYTHON:-python3}
 
-have_cvode() {
+have_cvodes() {
     local d
     for d in ${SUNDIALS_DIR:+"$SUNDIALS_DIR/include"} ${CONDA_PREFIX:+"$CONDA_PREFIX/include"} \
              /usr/include /usr/local/include /opt/homebrew/include; do
-        [ -f "$d/cvode/cvode.h" ] && return 0
+        [ -f "$d/cvodes/cvodes.h" ] && return 0
     done
     return 1
 }
 
 packages=()
-have_cvode || packages+=(libsundials-dev)
+have_cvodes || packages+=(libsundials-dev)
 command -v cc >/dev/null 2>&1 || packages+=(gcc libc6-dev)
 "$PYTHON" -c 'import venv, ensurepip' >/dev/null 2>&1 || packages+=(python3-venv)
 "$PYTHON" - <<'PY' || packages+=(python3-dev)
@@ -32,7 +32,7 @@ if [ ${#packages[@]} -gt 0 ]; then
         $sudo apt-get update -qq
         DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${packages[@]}" >/dev/null
     else
-        echo "setup: please install ${packages[*]} (SUNDIALS CVODE 6.x or 7.x, a C compiler," \
+        echo "setup: please install ${packages[*]} (SUNDIALS CVODES 6.x or 7.x, a C compiler," \
              "Python headers), or set SUNDIALS_DIR to where SUNDIALS is installed" >&2
         exit 1
     fi

@@ -145,12 +145,14 @@ def test_committed_generated_code_is_up_to_date(folder):
 
 
 def _jacobian_and_differences(model, y: np.ndarray, p, columns: int) -> tuple[np.ndarray, np.ndarray]:
-    """The model's analytic Jacobian at y, and central differences of its right-hand side in
-    the first `columns` states (the rest left 0)."""
+    """The model's analytic Jacobian at y (of the motion, y = (q, u): the works and impulses
+    are quadratures), and central differences of its right-hand side's motion rows in the
+    first `columns` states (the rest left 0)."""
     ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.links
-    J = ffi.new("double[]", N * N)
+    M = lib.MODEL_NMOTION
+    J = ffi.new("double[]", M * M)
     assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
-    fd = np.zeros((N, N))
+    fd = np.zeros((M, M))
     for j in range(columns):
         # small steps: the penetration is only ~1e-5 m, and moves by L h per step in q
         h = 1e-9 if j < n else (1e-8 if j < 2 * n else 1e-3)
@@ -160,9 +162,9 @@ def _jacobian_and_differences(model, y: np.ndarray, p, columns: int) -> tuple[np
             yy[j] += sign * h
             f = ffi.new("double[]", N)
             assert lib.model_rhs(0.0, ffi.new("double[]", list(yy)), f, p) == 0
-            out.append(np.array(list(f)))
+            out.append(np.array(list(f))[:M])
         fd[:, j] = (out[0] - out[1]) / (2 * h)
-    return np.array(list(J)).reshape(N, N), fd
+    return np.array(list(J)).reshape(M, M), fd
 
 
 @pytest.mark.parametrize("spec", [ModelSpec(1, jacobian=True), ModelSpec(2, jacobian=True),
@@ -195,7 +197,7 @@ def test_analytic_jacobian_matches_central_differences(spec):
             y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, n), np.zeros(N - 2 * n)])
             y_B = sum(values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n))
             tip.y_s = y_B + 1.2e-5  # inside the contact, clear of every law's kinks
-            J, fd = _jacobian_and_differences(model, y, p, N)
+            J, fd = _jacobian_and_differences(model, y, p, 2 * n)
             scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
             assert np.all(np.abs(J - fd) <= 1e-5 * scale + 1e-9), phase
 
@@ -220,7 +222,9 @@ def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
 
 
 @pytest.mark.parametrize("spec", [ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
-                                  ModelSpec(3, "hertz", "none", True, joints=(2,))], ids=lambda s: s.slug)
+                                  ModelSpec(3, "hertz", "none", True, joints=(2,)),
+                                  ModelSpec(3, "three-phase", "regularized", True, True, joints=(1, 2))],
+                         ids=lambda s: s.slug)
 def test_analytic_jacobian_covers_every_contact_point(spec):
     """Every contact point's force enters the equations as J^T (F_f, F), and the analytic
     Jacobian follows each of them: the joints and the tip all in contact at once, against
@@ -253,6 +257,24 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
         scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
         assert np.abs(fd[n:2 * n]).max() > 1e3  # the contact forces dominate the accelerations
         assert np.all(np.abs(J - fd)[:, :2 * n] <= 1e-5 * scale + 1e-9), phase
+        _assert_split_rhs(model, y, p)
+    if spec.sustained:  # a point held by a constraint force (resting): the quadratures take it too
+        p.point[0].phase = lib.MODEL_PHASE_SUSTAINED
+        _assert_split_rhs(model, y, p)
+
+
+def _assert_split_rhs(model, y: np.ndarray, p) -> None:
+    """The right-hand side in two parts, the motion's and the quadratures' (the works and
+    impulses, which BDF integrates outside its Newton iteration), is the whole one."""
+    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.links
+    y_c = ffi.new("double[]", list(y))
+    whole, motion = ffi.new("double[]", N), ffi.new("double[]", 2 * n)
+    quadratures = ffi.new("double[]", N - 2 * n)
+    assert lib.model_rhs(0.0, y_c, whole, p) == 0
+    assert lib.model_motion_rhs(0.0, y_c, motion, p) == 0
+    assert lib.model_quadratures(0.0, y_c, quadratures, p) == 0
+    assert list(motion) + list(quadratures) == list(whole)
+    assert np.abs(list(quadratures)).max() > 1.0  # the points' forces are in them
 
 
 def test_models_of_two_prefixes_link_into_one_program(tmp_path):

@@ -9,16 +9,16 @@ import pytest
 from impactgen import sundials
 from impactgen.errors import BuildError
 
-LIBS = ("sundials_cvode", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
+LIBS = ("sundials_cvodes", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
         "sundials_sunlinsoldense", "sundials_core")
 
 
 def _prefix(root: Path, version: str, mpi_enabled: bool, mpi_beside: bool = False) -> Path:
-    """A prefix with what find_sundials looks at: cvode.h, sundials_config.h, the libraries."""
-    (root / "include" / "cvode").mkdir(parents=True)
+    """A prefix with what find_sundials looks at: cvodes.h, sundials_config.h, the libraries."""
+    (root / "include" / "cvodes").mkdir(parents=True)
     (root / "include" / "sundials").mkdir()
     (root / "lib").mkdir()
-    (root / "include" / "cvode" / "cvode.h").write_text("")
+    (root / "include" / "cvodes" / "cvodes.h").write_text("")
     (root / "include" / "sundials" / "sundials_config.h").write_text(
         f'#define SUNDIALS_VERSION "{version}"\n#define SUNDIALS_MPI_ENABLED {int(mpi_enabled)}\n')
     for lib in LIBS:

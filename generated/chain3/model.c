@@ -110,57 +110,10 @@ double model_normal_force(int k, double delta, const model_params *p)
     return k >= 0 && k < MODEL_NCONTACT ? normal_force(delta, &p->point[k], p) : 0.0;
 }
 
-/* dF/d(delta) of the active normal-force law of a point, for the Jacobian. */
-static double normal_force_slope(double delta, const model_point_contact *pc, const model_params *p)
-{
-    (void)p;
-    switch (pc->phase) {
-    case MODEL_PHASE_ELASTIC: {
-        const double E_star = p->E_star;
-        const double R = pc->R;
-
-        if (!(delta > 0)) return 0.0;
-        const double dF = 2*E_star*sqrt(R)*sqrt(delta);
-
-        return dF;
-    }
-    case MODEL_PHASE_ELASTOPLASTIC: {
-        const double C_j = p->C_j;
-        const double B = p->B;
-        const double P_c = pc->P_c;
-        const double inv_delta_c = pc->inv_delta_c;
-        const double theta_c = pc->theta_c;
-
-        if (!(delta > 0)) return 0.0;
-        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)*pow(inv_delta_c, 5.0/12.0));
-        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)*pow(inv_delta_c, 5.0/9.0));
-        const double s2 = (1.0/C_j);
-        const double s3 = (1.0/2.0)*B + 1.0/2.0;
-        const double s4 = theta_c*exp(s3*log(delta*inv_delta_c));
-        const double s5 = s2*(0.92*cos(s4) + 1.92);
-        const double s6 = pow(delta, 1.0/10.0)*pow(inv_delta_c, 11.0/10.0)*(1 - s1);
-        const double dF = P_c*((10.0/351.0)*pow(delta, 59.0/90.0)*pow(inv_delta_c, 149.0/90.0)*s1*s5 - 0.07083333333333335*pow(delta, 11.0/12.0)*pow(inv_delta_c, 23.0/12.0)*s0 + (3.0/2.0)*sqrt(delta)*(inv_delta_c*sqrt(inv_delta_c))*s0 - 3.68*s2*s3*s4*s6*sin(s4) + (22.0/5.0)*s5*s6);
-
-        return dF;
-    }
-    case MODEL_PHASE_RESTITUTION: {
-        const double E_star = p->E_star;
-        const double delta_r = pc->delta_r;
-        const double R_res = pc->R_res;
-
-        if (!(delta > delta_r)) return 0.0;
-        const double dF = 2*E_star*sqrt(R_res)*sqrt(delta - delta_r);
-
-        return dF;
-    }
-    default:
-        return 0.0;
-    }
-}
-
 /* ---- the contact points: the joints with contact code (k from 0), then the tip (k = TIP_POINT) ---- */
 #define NCONTACT MODEL_NCONTACT
 #define TIP_POINT MODEL_TIP_POINT
+#define NMOTION MODEL_NMOTION  /* the motion (q, u) leads y; the works and impulses follow */
 
 /* The force law point k is under. */
 static inline int point_phase(const model_params *p, int k)
@@ -368,32 +321,76 @@ static void point_at(int k, const double *y, const double *trig, const model_par
     forces_at(&m, &p->point[k], p, pt);
 }
 
-/* The right-hand side, given the sines and cosines of y's angles (trig_of). */
-static int rhs_given_trig(double t, const double *y, const double *trig, double *ydot, const model_params *p)
+/* The works' and impulses' derivatives (qdot[i] of state NMOTION + i) from the contact forces c:
+ * the works of every point's forces, the tip's impulses. */
+static void integrands(const contact_forces *c, double *qdot)
 {
-    (void)t;
-    contact_forces c;
-    const int status = accelerations(y, trig, p, ydot + 3, &c);
+    const point_forces *tip = &c->point[TIP_POINT];
+    qdot[MODEL_Y_W_normal - NMOTION] = tip->F * tip->v_y;
+    qdot[MODEL_Y_W_friction - NMOTION] = tip->F_f * tip->v_x;
+    qdot[MODEL_Y_P_normal - NMOTION] = tip->F;
+    qdot[MODEL_Y_P_friction - NMOTION] = tip->F_f;
+}
+
+/* 1 when one of the n values is not finite (0 * x is 0 for a finite x and NaN otherwise). */
+static inline int not_finite(const double *x, int n)
+{
+    double sum = 0.0;
+    for (int k = 0; k < n; ++k) sum += 0.0 * x[k];
+    return isnan(sum) ? 1 : 0;
+}
+
+/* The motion's derivatives (ydot[0..NMOTION)) and the contact forces found on the way. */
+static int motion_rhs(const double *y, const double *trig, double *ydot, const model_params *p,
+                      contact_forces *c)
+{
+    const int status = accelerations(y, trig, p, ydot + 3, c);
     if (status) return status;
     ydot[0] = y[3];
     ydot[1] = y[4];
     ydot[2] = y[5];
-    /* the works of every point's forces, the tip's impulses */
-    const point_forces *tip = &c.point[TIP_POINT];
-    ydot[MODEL_Y_W_normal] = tip->F * tip->v_y;
-    ydot[MODEL_Y_W_friction] = tip->F_f * tip->v_x;
-    ydot[MODEL_Y_P_normal] = tip->F;
-    ydot[MODEL_Y_P_friction] = tip->F_f;
-    double not_finite = 0.0;  /* 0 * x is 0 for a finite x and NaN for an infinite or NaN one */
-    for (int k = 0; k < MODEL_NSTATE; ++k) not_finite += 0.0 * ydot[k];
-    return isnan(not_finite) ? 1 : 0;
+    return 0;
 }
 
 int model_rhs(double t, const double *y, double *ydot, const model_params *p)
 {
+    (void)t;
     double trig[6];
     trig_of(y, trig);
-    return rhs_given_trig(t, y, trig, ydot, p);
+    contact_forces c;
+    const int status = motion_rhs(y, trig, ydot, p, &c);
+    if (status) return status;
+    integrands(&c, ydot + NMOTION);
+    return not_finite(ydot, MODEL_NSTATE);
+}
+
+int model_motion_rhs(double t, const double *y, double *ydot, const model_params *p)
+{
+    (void)t;
+    double trig[6];
+    trig_of(y, trig);
+    contact_forces c;
+    const int status = motion_rhs(y, trig, ydot, p, &c);
+    return status ? status : not_finite(ydot, NMOTION);
+}
+
+int model_quadratures(double t, const double *y, double *qdot, const model_params *p)
+{
+    (void)t;
+    double trig[6];
+    trig_of(y, trig);
+    contact_forces c;
+    /* each point in contact under its own law, as accelerations finds it, without
+     * Kane's equations (half the cost of the quadratures on the falling chain) */
+    for (int k = 0; k < NCONTACT; ++k) {
+        point_motion m;
+        c.point[k] = NO_FORCES;
+        if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
+        motion_of_point(k, y, trig, p, &m);
+        forces_at(&m, &p->point[k], p, &c.point[k]);
+    }
+    integrands(&c, qdot);
+    return not_finite(qdot, MODEL_NQUAD);
 }
 
 void model_events(double t, const double *y, double *ev, const model_params *p)
@@ -493,10 +490,100 @@ void model_outputs(double t, const double *y, double *out, const model_params *p
     out[MODEL_OUT_V] = V;
 }
 
-/* The derivatives of a point's Jacobian rows and velocity over the angles. */
+void model_heights(const double *y, double *h, const model_params *p)
+{
+    const model_point_contact *pc = &p->point[TIP_POINT];  /* heights above the tip's surface level */
+    (void)pc;
+    const double q1 = y[0];
+    const double q2 = y[1];
+    const double q3 = y[2];
+    const double L1 = p->L1;
+    const double L2 = p->L2;
+    const double L3 = p->L3;
+    const double y_s = pc->y_s;
+    const double sin_q1 = sin(q1);
+    const double sin_q2 = sin(q2);
+    const double sin_q3 = sin(q3);
+
+    const double ht0 = L1*sin_q1 - y_s;
+    const double ht1 = L2*sin_q2 + ht0;
+    h[0] = ht0;
+    h[1] = ht1;
+    h[2] = L3*sin_q3 + ht1;
+
+}
+
+void model_tip_works(const double *y, double *W_normal, double *W_friction)
+{
+    *W_normal = y[MODEL_Y_W_normal];
+    *W_friction = y[MODEL_Y_W_friction];
+}
+
+/* d2(delta)/dt2 of point k at y, given ydot = dy/dt: -(Jy du/dt + (dJy/dt) u). */
+double model_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p)
+{
+    double trig[6];
+    point_motion m;
+    trig_of(y, trig);
+    motion_of_point(k, y, trig, p, &m);
+    double a = -m.Jdot_u[1];
+    for (int i = 0; i < 3; ++i) a -= m.Jy[i] * ydot[3 + i];
+    return a;
+}
+
+/* ---- the analytic Jacobian of the motion ---- */
+/* dF/d(delta) of the active normal-force law of a point, for the Jacobian. */
+static double normal_force_slope(double delta, const model_point_contact *pc, const model_params *p)
+{
+    (void)p;
+    switch (pc->phase) {
+    case MODEL_PHASE_ELASTIC: {
+        const double E_star = p->E_star;
+        const double R = pc->R;
+
+        if (!(delta > 0)) return 0.0;
+        const double dF = 2*E_star*sqrt(R)*sqrt(delta);
+
+        return dF;
+    }
+    case MODEL_PHASE_ELASTOPLASTIC: {
+        const double C_j = p->C_j;
+        const double B = p->B;
+        const double P_c = pc->P_c;
+        const double inv_delta_c = pc->inv_delta_c;
+        const double theta_c = pc->theta_c;
+
+        if (!(delta > 0)) return 0.0;
+        const double s0 = exp(-0.17*pow(delta, 5.0/12.0)*pow(inv_delta_c, 5.0/12.0));
+        const double s1 = exp(-1.0/78.0*pow(delta, 5.0/9.0)*pow(inv_delta_c, 5.0/9.0));
+        const double s2 = (1.0/C_j);
+        const double s3 = (1.0/2.0)*B + 1.0/2.0;
+        const double s4 = theta_c*exp(s3*log(delta*inv_delta_c));
+        const double s5 = s2*(0.92*cos(s4) + 1.92);
+        const double s6 = pow(delta, 1.0/10.0)*pow(inv_delta_c, 11.0/10.0)*(1 - s1);
+        const double dF = P_c*((10.0/351.0)*pow(delta, 59.0/90.0)*pow(inv_delta_c, 149.0/90.0)*s1*s5 - 0.07083333333333335*pow(delta, 11.0/12.0)*pow(inv_delta_c, 23.0/12.0)*s0 + (3.0/2.0)*sqrt(delta)*(inv_delta_c*sqrt(inv_delta_c))*s0 - 3.68*s2*s3*s4*s6*sin(s4) + (22.0/5.0)*s5*s6);
+
+        return dF;
+    }
+    case MODEL_PHASE_RESTITUTION: {
+        const double E_star = p->E_star;
+        const double delta_r = pc->delta_r;
+        const double R_res = pc->R_res;
+
+        if (!(delta > delta_r)) return 0.0;
+        const double dF = 2*E_star*sqrt(R_res)*sqrt(delta - delta_r);
+
+        return dF;
+    }
+    default:
+        return 0.0;
+    }
+}
+
+/* The derivatives of a point's Jacobian rows and v_x over the angles. */
 typedef struct {
-    double Hy[9], dv_y[3];  /* Hy[i n + j] = dJy_i/dq_j, dv_y[j] = dv_y/dq_j */
-    double Hx[9], dv_x[3];  /* and along x */
+    double Hy[9];  /* Hy[i n + j] = dJy_i/dq_j */
+    double Hx[9], dv_x[3];  /* and along x, with dv_x[j] = dv_x/dq_j (the friction law reads v_x) */
 } point_curvature;
 
 static void curvature_of_point(int k, const double *y, const double *trig, const model_params *p,
@@ -521,21 +608,15 @@ static void curvature_of_point(int k, const double *y, const double *trig, const
         const double pc0 = L1*cos_q1;
         const double pc1 = L2*cos_q2;
         const double pc2 = L3*cos_q3;
-        const double pc3 = L1*sin_q1;
-        const double pc4 = L2*sin_q2;
-        const double pc5 = L3*sin_q3;
         c->Hx[0] = -pc0;
         c->Hx[4] = -pc1;
         c->Hx[8] = -pc2;
         c->dv_x[0] = -pc0*u1;
         c->dv_x[1] = -pc1*u2;
         c->dv_x[2] = -pc2*u3;
-        c->Hy[0] = -pc3;
-        c->Hy[4] = -pc4;
-        c->Hy[8] = -pc5;
-        c->dv_y[0] = -pc3*u1;
-        c->dv_y[1] = -pc4*u2;
-        c->dv_y[2] = -pc5*u3;
+        c->Hy[0] = -L1*sin_q1;
+        c->Hy[4] = -L2*sin_q2;
+        c->Hy[8] = -L3*sin_q3;
 
         break;
     }
@@ -566,19 +647,10 @@ static void friction_slopes(const point_forces *c, const model_point_contact *pc
     *dFf_dv_out = dFf_dv;
 }
 
-/* The state rows of a point's own works and impulses (-1: none): W_normal, W_friction,
- * P_normal, P_friction in this order; the tip's impulses are P_normal and P_friction. */
-static void own_integrals(int k, int *rows)
-{
-    static const int table[NCONTACT][4] = {
-        { -1, -1, MODEL_Y_P_normal, MODEL_Y_P_friction }
-    };
-    for (int i = 0; i < 4; ++i) rows[i] = table[k][i];
-}
-
-/* J[i * NSTATE + j] = d ydot_i / d y_j: the chain's own G = d(f0)/dy - (dM/dy) du/dt, and by
- * the chain rule each point's J^T (F_f, F) with F = F(delta), delta = y_s - y_point, and
- * F_f = F_f(F, v_x); the works' and impulses' rows likewise. Valid while nothing is held. */
+/* J[i * NMOTION + j] = d ydot_i / d y_j over the motion, y = (q, u) (the works and impulses are
+ * quadratures: nothing depends on them, so they are not in it): the chain's own
+ * G = d(f0)/dy - (dM/dy) du/dt, and by the chain rule each point's J^T (F_f, F) with
+ * F = F(delta), delta = y_s - y_point, and F_f = F_f(F, v_x). Valid while nothing is held. */
 int model_jacobian(double t, const double *y, double *J, const model_params *p)
 {
     (void)t;
@@ -680,7 +752,7 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
         G[17] = 0;
 
     }
-    for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) J[k] = 0.0;
+    for (int k = 0; k < NMOTION * NMOTION; ++k) J[k] = 0.0;
     for (int k = 0; k < NCONTACT; ++k) {
         if (point_phase(p, k) == MODEL_PHASE_FREE) continue;
         const model_point_contact *pc = &p->point[k];
@@ -691,14 +763,12 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
         const double dF = normal_force_slope(c->delta, pc, p);
         double dFf_dF, dFf_dv;
         friction_slopes(c, pc, p, &dFf_dF, &dFf_dv);
-        /* d/dy of the point's forces and velocity, y = (q, u) */
-        double dFy[6], dvy[6];
+        /* d/dy of the point's forces and v_x, y = (q, u) */
+        double dFy[6];
         double dFx[6], dvx[6];
         for (int j = 0; j < 3; ++j) {
             dFy[j] = -dF * m->Jy[j];  /* d(delta)/dq_j = -dy/dq_j = -Jy_j */
             dFy[3 + j] = 0.0;
-            dvy[j] = cv.dv_y[j];
-            dvy[3 + j] = m->Jy[j];
             dvx[j] = cv.dv_x[j];
             dvx[3 + j] = m->Jx[j];
         }
@@ -710,69 +780,16 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p)
                 G[i * 6 + j] += g;
             }
         }
-        int own[4];
-        own_integrals(k, own);
-        for (int j = 0; j < 6; ++j) {
-            const double power_n = dFy[j] * c->v_y + c->F * dvy[j];
-            J[MODEL_Y_W_normal * MODEL_NSTATE + j] += power_n;
-            const double power_f = dFx[j] * c->v_x + c->F_f * dvx[j];
-            J[MODEL_Y_W_friction * MODEL_NSTATE + j] += power_f;
-            const double row[4] = {power_n, power_f, dFy[j], dFx[j]};
-            for (int r = 0; r < 4; ++r) {
-                if (own[r] >= 0) J[own[r] * MODEL_NSTATE + j] = row[r];
-            }
-        }
     }
     for (int j = 0; j < 6; ++j) {
         double column[3];
         for (int i = 0; i < 3; ++i) column[i] = G[i * 6 + j];
         ldl_solve(M, dinv, column);
-        for (int i = 0; i < 3; ++i) J[(3 + i) * MODEL_NSTATE + j] = column[i];
+        for (int i = 0; i < 3; ++i) J[(3 + i) * NMOTION + j] = column[i];
     }
-    for (int i = 0; i < 3; ++i) J[i * MODEL_NSTATE + 3 + i] = 1.0;  /* dq/dt = u */
-    for (int k = 0; k < MODEL_NSTATE * MODEL_NSTATE; ++k) {
+    for (int i = 0; i < 3; ++i) J[i * NMOTION + 3 + i] = 1.0;  /* dq/dt = u */
+    for (int k = 0; k < NMOTION * NMOTION; ++k) {
         if (!isfinite(J[k])) return 1;
     }
     return 0;
-}
-
-void model_heights(const double *y, double *h, const model_params *p)
-{
-    const model_point_contact *pc = &p->point[TIP_POINT];  /* heights above the tip's surface level */
-    (void)pc;
-    const double q1 = y[0];
-    const double q2 = y[1];
-    const double q3 = y[2];
-    const double L1 = p->L1;
-    const double L2 = p->L2;
-    const double L3 = p->L3;
-    const double y_s = pc->y_s;
-    const double sin_q1 = sin(q1);
-    const double sin_q2 = sin(q2);
-    const double sin_q3 = sin(q3);
-
-    const double ht0 = L1*sin_q1 - y_s;
-    const double ht1 = L2*sin_q2 + ht0;
-    h[0] = ht0;
-    h[1] = ht1;
-    h[2] = L3*sin_q3 + ht1;
-
-}
-
-void model_tip_works(const double *y, double *W_normal, double *W_friction)
-{
-    *W_normal = y[MODEL_Y_W_normal];
-    *W_friction = y[MODEL_Y_W_friction];
-}
-
-/* d2(delta)/dt2 of point k at y, given ydot = dy/dt: -(Jy du/dt + (dJy/dt) u). */
-double model_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p)
-{
-    double trig[6];
-    point_motion m;
-    trig_of(y, trig);
-    motion_of_point(k, y, trig, p, &m);
-    double a = -m.Jdot_u[1];
-    for (int i = 0; i < 3; ++i) a -= m.Jy[i] * ydot[3 + i];
-    return a;
 }

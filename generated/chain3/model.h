@@ -15,6 +15,10 @@ extern "C" {
 
 #define MODEL_NQ 3
 #define MODEL_NSTATE 10
+/* y = (q, u, then the quadratures): the motion's NMOTION states, then NQUAD works and impulses,
+ * integrals of the contact forces that nothing depends on. */
+#define MODEL_NMOTION 6
+#define MODEL_NQUAD 4
 /* Where the integrated states sit in y: W_* the works of the contact forces (J), P_* their
  * impulses (N s). */
 #define MODEL_Y_W_normal 6
@@ -118,11 +122,17 @@ typedef struct {
 
 /* State y = [q1, q2, q3, u1, u2, u3, W_normal, W_friction, P_normal, P_friction]; W_* are the works of the contact forces, P_* their impulses. */
 int model_rhs(double t, const double *y, double *ydot, const model_params *p);
+/* The right-hand side in two parts, each reading the motion y[0..NMOTION) only: the motion's
+ * ydot[0..NMOTION), and the quadratures' qdot[i] = d y[NMOTION + i]/dt (i < NQUAD), for an
+ * integrator that keeps the works and impulses out of its Newton iteration. Return as
+ * model_rhs does. */
+int model_motion_rhs(double t, const double *y, double *ydot, const model_params *p);
+int model_quadratures(double t, const double *y, double *qdot, const model_params *p);
 /* The normal force at penetration delta under the law of point k's record. */
 double model_normal_force(int k, double delta, const model_params *p);
 void model_events(double t, const double *y, double *ev, const model_params *p);
 void model_outputs(double t, const double *y, double *out, const model_params *p);
-/* J[i * NSTATE + j] = d ydot_i / d y_j (row-major); returns as model_rhs does. */
+/* J[i * NMOTION + j] = d ydot_i / d y_j over the motion (row-major); returns as model_rhs does. */
 int model_jacobian(double t, const double *y, double *J, const model_params *p);
 /* The floor net: the points of the chain that can go under the surface, the joints between
  * the links (1 to 2) then the tip. h[k] = their heights above the surface y_s. */

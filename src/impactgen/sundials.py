@@ -1,4 +1,7 @@
-"""Find SUNDIALS CVODE (headers and libraries) for the build, version 6.x or 7.x."""
+"""Find SUNDIALS CVODES (headers and libraries) for the build, version 6.x or 7.x.
+
+CVODES, not CVODE: the BDF stepper integrates the works and impulses as CVODES quadratures
+(native/step_cvode.c). Debian's libsundials-dev, conda's and Homebrew's sundials ship both."""
 from __future__ import annotations
 
 import functools
@@ -13,7 +16,7 @@ from pathlib import Path
 from .errors import BuildError
 
 INSTALL_HINT = (
-    "install SUNDIALS CVODE: on Debian/Ubuntu 'sudo apt-get install libsundials-dev' "
+    "install SUNDIALS (CVODES): on Debian/Ubuntu 'sudo apt-get install libsundials-dev' "
     "(or run 'make setup'), with conda 'conda install -c conda-forge sundials', on macOS "
     "'brew install sundials'; or set SUNDIALS_DIR to the prefix it is installed under"
 )
@@ -40,7 +43,7 @@ class Sundials:
 
     def static_libraries(self) -> list[str] | None:
         """The static archives (lib*.a) of the SUNDIALS libraries, in link order, for a
-        shared object that must carry CVODE inside (an FMU); None when one is missing."""
+        shared object that must carry CVODES inside (an FMU); None when one is missing."""
         found = []
         for lib in self.libraries:
             if not lib.startswith("sundials_"):
@@ -80,7 +83,7 @@ def _pkg_config(package: str, *what: str) -> list[str] | None:
 
 
 def _pkg_config_include() -> list[Path]:
-    flags = _pkg_config("sundials-cvode", "--cflags-only-I") or []
+    flags = _pkg_config("sundials-cvodes", "--cflags-only-I") or []
     return [Path(flag[2:]) for flag in flags if flag.startswith("-I")]
 
 
@@ -112,14 +115,14 @@ def _multiarch() -> str:
 
 @functools.lru_cache(maxsize=1)
 def find_sundials() -> Sundials:
-    """Locate CVODE; raise BuildError saying how to install it when it is missing."""
+    """Locate CVODES; raise BuildError saying how to install it when it is missing."""
     candidates = [(p / "include", p) for p in _prefixes()]
     candidates = [(inc, inc.parent) for inc in _pkg_config_include()] + candidates
     looked = []
     for include, prefix in candidates:
         config = include / "sundials" / "sundials_config.h"
         looked.append(str(include))
-        if not (include / "cvode" / "cvode.h").is_file() or not config.is_file():
+        if not (include / "cvodes" / "cvodes.h").is_file() or not config.is_file():
             continue
         text = config.read_text(errors="replace")
         match = re.search(r'#define\s+SUNDIALS_VERSION\s+"([0-9.]+)', text)
@@ -130,9 +133,9 @@ def find_sundials() -> Sundials:
         if major < 6:
             raise BuildError(f"SUNDIALS {version} found in {include} is too old: impactgen "
                              f"needs 6.x or 7.x; {INSTALL_HINT}")
-        libs = ["sundials_cvode", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
+        libs = ["sundials_cvodes", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
                 "sundials_sunlinsoldense"]
-        lib_dir = _library_dir(prefix, "sundials_cvode")
+        lib_dir = _library_dir(prefix, "sundials_cvodes")
         if lib_dir is None:
             continue
         if major >= 7 and any(lib_dir.glob("libsundials_core.*")):
@@ -153,5 +156,5 @@ def find_sundials() -> Sundials:
             library_dirs += [d for d in mpi[1] if d not in library_dirs]
             libs += mpi[2]
         return Sundials(version, tuple(include_dirs), tuple(library_dirs), tuple(libs), str(lib_dir))
-    raise BuildError(f"SUNDIALS CVODE not found (looked for cvode/cvode.h under "
+    raise BuildError(f"SUNDIALS CVODES not found (looked for cvodes/cvodes.h under "
                      f"{', '.join(dict.fromkeys(looked))}); {INSTALL_HINT}")

@@ -157,5 +157,5 @@ def generate(scene, out: Path, prefix: str, write_scene: bool = False, force: bo
           f"in {out / (prefix + '_scene.h')}")
     if write_scene:
         print(f"scene: {out / 'scene.toml'} (simulate it: impactgen run {out / 'scene.toml'})")
-    print(f"compiled with CVODE: {compiled.path} ({elapsed:.1f} s)")
+    print(f"compiled with SUNDIALS: {compiled.path} ({elapsed:.1f} s)")
     return 0

@@ -182,7 +182,7 @@ def _compile(src: Path, c_files: list[str], defines: list[str], cs: bool, binary
         static = sundials.static_libraries()
         if static is None:
             raise BuildError(f"Co-Simulation carries CVODE inside the FMU, which needs SUNDIALS' static "
-                             f"libraries (libsundials_cvode.a, ...) in {sundials.lib_dir}: install them "
+                             f"libraries (libsundials_cvodes.a, ...) in {sundials.lib_dir}: install them "
                              "(Debian's libsundials-dev has them), or build a Model Exchange FMU (--kind me)")
         args += [f"-I{d}" for d in sundials.include_dirs] + static
         args += [f"-l{lib}" for lib in sundials.libraries if not lib.startswith("sundials_")]
@@ -199,12 +199,12 @@ def _build_description(identifier: str, c_files: list[str], defines: list[str], 
     files = "\n".join(f'      <SourceFile name="{f}"/>' for f in c_files)
     defs = "\n".join(f'      <PreprocessorDefinition name="{d}"/>' for d in defines)
     libs = ("\n" + "\n".join(f'      <Library name="{lib}"/>' for lib in
-                             ("sundials_cvode", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
+                             ("sundials_cvodes", "sundials_arkode", "sundials_nvecserial", "sundials_sunmatrixdense",
                               "sundials_sunlinsoldense"))) if cs else ""
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiBuildDescription fmiVersion="2.0">
   <!-- Rebuild: compile the C99 files below into a shared library named {identifier}, with the
-       definitions below{", linked to SUNDIALS CVODE 6 or 7 (statically, to export only fmi2*)" if cs else ""}. -->
+       definitions below{", linked to SUNDIALS CVODES 6 or 7 (statically, to export only fmi2*)" if cs else ""}. -->
   <BuildConfiguration modelIdentifier="{identifier}">
     <SourceFileSet language="C99">
 {files}

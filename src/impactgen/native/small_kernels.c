@@ -253,7 +253,7 @@ static int dense_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, s
     return IG_LS_SUCCESS;
 }
 
-void ig_use_small_kernels(N_Vector y, SUNMatrix A, SUNLinearSolver LS)
+void ig_use_small_vector_kernels(N_Vector y)
 {
     N_Vector_Ops v = y->ops;
     v->nvlinearsum = linear_sum;
@@ -268,7 +268,11 @@ void ig_use_small_kernels(N_Vector y, SUNMatrix A, SUNLinearSolver LS)
     if (v->nvlinearcombination) v->nvlinearcombination = linear_combination;
     if (v->nvscaleaddmulti) v->nvscaleaddmulti = scale_add_multi;
     if (v->nvscalevectorarray) v->nvscalevectorarray = scale_vector_array;
+}
 
+void ig_use_small_kernels(N_Vector y, SUNMatrix A, SUNLinearSolver LS)
+{
+    ig_use_small_vector_kernels(y);
     use_matrix_kernels(A);
 
     LS->ops->setup = dense_setup;

@@ -19,5 +19,7 @@
 /* Install the kernels on a serial vector (before CVODE clones it), a dense matrix (before
  * CVodeSetLinearSolver clones it) and the dense linear solver built on them. */
 void ig_use_small_kernels(N_Vector y, SUNMatrix A, SUNLinearSolver LS);
+/* The vector kernels only (a vector CVODE uses beside y: its quadratures'). */
+void ig_use_small_vector_kernels(N_Vector y);
 
 #endif

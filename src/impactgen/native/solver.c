@@ -23,6 +23,16 @@ static int rhs(double t, const double *y, double *ydot, void *user)
     return model_rhs(t, y, ydot, ((const ig_solver *)user)->params);
 }
 
+static int motion(double t, const double *y, double *ydot, void *user)
+{
+    return model_motion_rhs(t, y, ydot, ((const ig_solver *)user)->params);
+}
+
+static int quadratures(double t, const double *y, double *qdot, void *user)
+{
+    return model_quadratures(t, y, qdot, ((const ig_solver *)user)->params);
+}
+
 static void watched(double t, const double *y, double *g, void *user)
 {
     const ig_solver *s = (const ig_solver *)user;
@@ -95,6 +105,9 @@ ig_solver *ig_solver_new(int method, int analytic_jacobian, double rtol, const d
     s->problem.max_events = MODEL_NEVENT;
     s->problem.rhs = rhs;
     s->problem.events = watched;
+    s->problem.nquad = MODEL_NQUAD;
+    s->problem.motion = motion;
+    s->problem.quadratures = quadratures;
 #if MODEL_HAS_JACOBIAN
     s->problem.jacobian = analytic_jacobian ? jacobian : NULL;
 #endif

@@ -37,17 +37,23 @@ enum {
 typedef int (*ig_rhs_fn)(double t, const double *y, double *ydot, void *user);
 /* The watched event functions at (t, y), in the order of the start's directions. */
 typedef void (*ig_events_fn)(double t, const double *y, double *g, void *user);
-/* J[i * n + j] = d f_i / d y_j (row-major); returns as ig_rhs_fn does. */
+/* J[i * m + j] = d f_i / d y_j over the first m = n - nquad states (row-major); returns as
+ * ig_rhs_fn does. */
 typedef int (*ig_jacobian_fn)(double t, const double *y, double *J, void *user);
 
-/* The system a stepper integrates; it keeps a pointer to it, which must outlive it. */
+/* The system a stepper integrates; it keeps a pointer to it, which must outlive it. Its last
+ * nquad states are quadratures: their derivatives read the other states only, and nothing
+ * reads them, so an implicit method can leave them out of its Newton iteration. */
 typedef struct {
     int n;                   /* equations */
-    int max_events;          /* the most event functions watched at once */
-    ig_rhs_fn rhs;
+    int max_events;          /* the most event functions watched at once (they read no quadrature) */
+    ig_rhs_fn rhs;           /* all n derivatives */
     ig_events_fn events;
     ig_jacobian_fn jacobian; /* NULL: none (difference quotients where a method needs one) */
-    void *user;              /* passed to the three */
+    int nquad;               /* the quadratures, y[n - nquad ..) */
+    ig_rhs_fn motion;        /* the derivatives of the first n - nquad states */
+    ig_rhs_fn quadratures;   /* the quadratures' nquad derivatives (from the first n - nquad states) */
+    void *user;              /* passed to the functions */
     char *message;           /* where a stepper writes why it failed */
     int message_size;
 } ig_problem;
