@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.linalg.lapack import dgesv
@@ -64,14 +65,18 @@ class ChainModel:
                 mu[i, k] = m[i] / 4 + outboard[i] if i == k else m[j] / 2 + outboard[j]
         return cls(L, m, scene.chain.gravity, np.outer(L, L) * mu, m * L ** 2 / 12, m / 2 + outboard)
 
-    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        return self._mass_matrix(np.cos(q[:, None] - q[None, :]))
+    @cached_property
+    def inertia_matrix(self) -> np.ndarray:
+        """diag(m_i L_i^2 / 12), the links' own rotational inertia in M."""
+        return np.diag(self.inertia)
 
-    def _mass_matrix(self, cos_dq: np.ndarray) -> np.ndarray:
-        """M from cos(q_i - q_k): c_ik cos(q_i - q_k), and m_i L_i^2 / 12 added on the diagonal."""
-        M = self.c * cos_dq
-        M.flat[::len(self.L) + 1] += self.inertia
-        return M
+    @cached_property
+    def weight(self) -> np.ndarray:
+        """-g L_i, the factor of gravity's term in Q_i."""
+        return -self.g * self.L
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        return self.c * np.cos(np.subtract.outer(q, q)) + self.inertia_matrix
 
     def accelerations(self, q: np.ndarray, u: np.ndarray, F: float | np.ndarray,
                       F_f: float | np.ndarray) -> np.ndarray:
@@ -79,11 +84,11 @@ class ChainModel:
         (n,) from `loads`, or numbers that every link carries (forces at point n alone). The
         right-hand side calls this at every evaluation: each angle difference, cosine and sine
         is taken once."""
-        dq = q[:, None] - q[None, :]
+        dq = np.subtract.outer(q, q)
         velocity_terms = (self.c * np.sin(dq)) @ (u * u)
         cos_q = np.cos(q)
-        Q = -self.g * self.L * cos_q * self.gravity_arm + self.L * (F * cos_q - F_f * np.sin(q))
-        return solve(self._mass_matrix(np.cos(dq)), Q - velocity_terms)
+        Q = self.weight * cos_q * self.gravity_arm + self.L * (F * cos_q - F_f * np.sin(q))
+        return solve(self.c * np.cos(dq) + self.inertia_matrix, Q - velocity_terms)
 
     def loads(self, points: list[int], forces: list[float]) -> np.ndarray:
         """The force each link carries (n,): link i (from 0) carries the forces of the points
