@@ -72,7 +72,10 @@ asan=$("$CC" -print-file-name=libasan.so)
 export IMPACTGEN_SANITIZE=1 IMPACTGEN_CACHE_DIR="$work/cache"
 # CPython itself keeps memory until exit: leaks are checked by the driver above, not here.
 export ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-LD_PRELOAD="$asan" "$PY" -m pytest -q -p no:cacheprovider \
-    tests/test_paper.py tests/test_phases.py tests/test_energy.py tests/test_coulomb.py \
+# The sanitizer runtime is preloaded into this Python only: the compilers that build the
+# instrumented models inherit the environment, and under the preloaded runtime's allocator
+# they take about a third more CPU for the same objects.
+LD_PRELOAD="$asan" "$PY" -c 'import os, sys; del os.environ["LD_PRELOAD"]; import pytest; sys.exit(pytest.main(sys.argv[1:]))' \
+    -q -p no:cacheprovider tests/test_paper.py tests/test_phases.py tests/test_energy.py tests/test_coulomb.py \
     tests/test_sustained.py tests/test_memory.py tests/test_api.py tests/test_methods.py "$@"
 echo "sanitize: clean"

@@ -1,7 +1,9 @@
 """The pure-Python reference engine: an independent implementation to check the C against.
 
 It shares no code with codegen/ or the generated C: only the scene loader and the result
-types. Clarity comes first; speed is not a goal.
+types. Clarity comes first; where the integrators call in at every evaluation (the
+right-hand side, the events, Radau's linear solves) the code avoids per-call overhead that
+changes no result, because the test suite runs this engine for minutes.
 
 - `chain`: the chain's equations, derived by hand with Lagrange's equations (not Kane's
   method and sympy), and the kinematics of its points;

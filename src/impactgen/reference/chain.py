@@ -26,9 +26,12 @@ the forces of every point at or beyond its end (`ChainModel.loads`), and with gr
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+from scipy.linalg.lapack import dgesv
 
 from ..scene import Scene
 
@@ -62,16 +65,30 @@ class ChainModel:
                 mu[i, k] = m[i] / 4 + outboard[i] if i == k else m[j] / 2 + outboard[j]
         return cls(L, m, scene.chain.gravity, np.outer(L, L) * mu, m * L ** 2 / 12, m / 2 + outboard)
 
+    @cached_property
+    def inertia_matrix(self) -> np.ndarray:
+        """diag(m_i L_i^2 / 12), the links' own rotational inertia in M."""
+        return np.diag(self.inertia)
+
+    @cached_property
+    def weight(self) -> np.ndarray:
+        """-g L_i, the factor of gravity's term in Q_i."""
+        return -self.g * self.L
+
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        return self.c * np.cos(q[:, None] - q[None, :]) + np.diag(self.inertia)
+        return self.c * np.cos(np.subtract.outer(q, q)) + self.inertia_matrix
 
     def accelerations(self, q: np.ndarray, u: np.ndarray, F: float | np.ndarray,
                       F_f: float | np.ndarray) -> np.ndarray:
         """du/dt under the normal loads F and the friction loads F_f the links carry: arrays
-        (n,) from `loads`, or numbers that every link carries (forces at point n alone)."""
-        velocity_terms = (self.c * np.sin(q[:, None] - q[None, :])) @ (u ** 2)
-        Q = -self.g * self.L * np.cos(q) * self.gravity_arm + self.L * (F * np.cos(q) - F_f * np.sin(q))
-        return np.linalg.solve(self.mass_matrix(q), Q - velocity_terms)
+        (n,) from `loads`, or numbers that every link carries (forces at point n alone). The
+        right-hand side calls this at every evaluation: each angle difference, cosine and sine
+        is taken once."""
+        dq = np.subtract.outer(q, q)
+        velocity_terms = (self.c * np.sin(dq)) @ (u * u)
+        cos_q = np.cos(q)
+        Q = self.weight * cos_q * self.gravity_arm + self.L * (F * cos_q - F_f * np.sin(q))
+        return solve(self.c * np.cos(dq) + self.inertia_matrix, Q - velocity_terms)
 
     def loads(self, points: list[int], forces: list[float]) -> np.ndarray:
         """The force each link carries (n,): link i (from 0) carries the forces of the points
@@ -83,10 +100,26 @@ class ChainModel:
 
     def point(self, q: np.ndarray, u: np.ndarray, k: int) -> tuple[float, float, float, float]:
         """x, y, v_x, v_y of point k, the end of link k (k = 1..n): sums over the links up to
-        it. q and u may hold samples, of shape (n, N)."""
-        L, q, u = (self.L[:k] if q.ndim == 1 else self.L[:k, None]), q[:k], u[:k]
+        it. q and u may hold samples, of shape (n, N); for one state (the right-hand side and
+        the events ask for one at every evaluation) the sums are taken over plain floats."""
+        if q.ndim == 1:
+            x = y = v_x = v_y = 0.0
+            for L, q_i, u_i in zip(self.L[:k].tolist(), q[:k].tolist(), u[:k].tolist()):
+                cos_q, sin_q = math.cos(q_i), math.sin(q_i)
+                x, y = x + L * cos_q, y + L * sin_q
+                v_x, v_y = v_x - L * u_i * sin_q, v_y + L * u_i * cos_q
+            return x, y, v_x, v_y
+        L, q, u = self.L[:k, None], q[:k], u[:k]
         return ((L * np.cos(q)).sum(0), (L * np.sin(q)).sum(0),
                 (-L * u * np.sin(q)).sum(0), (L * u * np.cos(q)).sum(0))
+
+    def height_and_rate(self, q: np.ndarray, u: np.ndarray, k: int) -> tuple[float, float]:
+        """y and v_y of point k for one state: what its contact events need."""
+        y = v_y = 0.0
+        for L, q_i, u_i in zip(self.L[:k].tolist(), q[:k].tolist(), u[:k].tolist()):
+            y += L * math.sin(q_i)
+            v_y += L * u_i * math.cos(q_i)
+        return y, v_y
 
     def holding_forces(self, q: np.ndarray, u: np.ndarray, F: np.ndarray, F_f: np.ndarray,
                        held: list[int]) -> np.ndarray:
@@ -125,3 +158,13 @@ class ChainModel:
             vx, vy = vx - L * u[j] * np.sin(q[j]), vy + L * u[j] * np.cos(q[j])
             y = y + L * np.sin(q[j])
         return T, V
+
+
+def solve(M: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """x with M x = b, by LAPACK's dgesv (LU with partial pivoting), the routine
+    numpy.linalg.solve calls, without its checks and conversions: on the chain's few links
+    they took longer than the solve. M is overwritten."""
+    _, _, x, info = dgesv(M, b, overwrite_a=True)
+    if info:
+        raise np.linalg.LinAlgError(f"singular mass matrix (dgesv info = {info})")
+    return x

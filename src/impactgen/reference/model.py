@@ -104,7 +104,7 @@ class ReferenceModel:
 
     def delta_and_rate(self, y: np.ndarray, point: ContactPoint) -> tuple[float, float]:
         """The penetration of a point and its rate."""
-        _, y_k, _, v_y = self.kinematics(y, point)
+        y_k, v_y = self.chain.height_and_rate(y[:self.n], y[self.n:2 * self.n], point.index)
         return point.contact.y_s - y_k, -v_y
 
     def rhs(self, t: float, y: np.ndarray, phase: str | None = None) -> np.ndarray:
@@ -117,10 +117,11 @@ class ReferenceModel:
         indices = [a.point.index for a in active]
         F = self.chain.loads(indices, [a.F for a in active])
         F_f = self.chain.loads(indices, [a.F_f for a in active])
-        total = sum((self.integrands(a) for a in active), np.zeros(self.nstate - 2 * self.n))
+        own = [self.integrands(a) for a in active]
+        total = [sum(rates) for rates in zip(*own)] if own else [0.0] * (self.nstate - 2 * self.n)
         parts = [self.chain_rates(t, y, F, F_f), total]
         if len(y) > self.nstate:  # each point's own, in the order of `points`
-            parts += [self.integrands(a) for a in active]
+            parts += own
         return np.concatenate(parts)
 
     def chain_rates(self, t: float, y: np.ndarray, F: np.ndarray, F_f: np.ndarray) -> np.ndarray:
@@ -130,11 +131,11 @@ class ReferenceModel:
         q, u = y[:n], y[n:2 * n]
         return np.concatenate([u, self.chain.accelerations(q, u, F, F_f)])
 
-    def integrands(self, a: PointForce) -> np.ndarray:
+    def integrands(self, a: PointForce) -> list[float]:
         """The rates of W_normal[, W_friction], P_normal[, P_friction] of one point's forces."""
         if self.friction_state:
-            return np.array([a.F * a.v_y, a.F_f * a.v_x, a.F, a.F_f])
-        return np.array([a.F * a.v_y, a.F])
+            return [a.F * a.v_y, a.F_f * a.v_x, a.F, a.F_f]
+        return [a.F * a.v_y, a.F]
 
     def contact_forces(self, y: np.ndarray, phases: Mapping[int, str] | None = None,
                        still: ContactPoint | None = None) -> list[PointForce]:
