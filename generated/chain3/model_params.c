@@ -364,15 +364,18 @@ double model_shortest_link(const model_params *p)
     return fmin(p->L1, fmin(p->L2, p->L3));
 }
 
+double model_surface_at_start(const model_params *p, const double *y)
+{
+    if (p->surface_initial == 0.0) return p->surface_height;
+    double out[MODEL_NOUT];
+    model_outputs(0.0, y, out, p);
+    return out[MODEL_OUT_y_B];
+}
+
 /* ---- the joints pruned from this model (docs/embedding.md) ---- */
 int model_pruned_reach(const model_params *p, const double *y)
 {
-    /* the surface below the pivot (at height 0): the scene's, or the tip's height in y (the
-     * heights are above the tip's surface level) */
-    double h[MODEL_NPOINT];
-    model_heights(y, h, p);
-    const double tip = h[MODEL_NPOINT - 1] + p->point[MODEL_TIP_POINT].y_s;
-    const double y_s = p->surface_initial != 0.0 ? tip : p->surface_height;
+    const double y_s = model_surface_at_start(p, y);  /* below the pivot, at height 0 */
     const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, model_chain_length(p));
     double reach = 0.0;  /* joint j can reach the surface iff L1 + ... + Lj >= -y_s */
     reach += p->L1;

@@ -201,6 +201,9 @@ int model_point_output(int k, int field);
 int model_first_event(int k);
 int model_event_point(int e);
 int model_point_number(int k);
+/* The surface's height at the start state y: p->surface_height, or the tip's height when
+ * p->surface_initial is set (surface.height = "initial"). */
+double model_surface_at_start(const model_params *p, const double *y);
 /* The chain's length, mass and shortest link. */
 double model_chain_length(const model_params *p);
 double model_chain_mass(const model_params *p);

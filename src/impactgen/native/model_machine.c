@@ -38,9 +38,9 @@ static int pulled_in(const model_params *p, int point, double t, const double *y
     const point_outputs o = outputs_at(out, point);
     if (fabs(o.delta_rate) > MODEL_TANGENTIAL_TOLERANCE * (fabs(o.v_x) + fabs(o.v_y))) return 0;
     model_params free_flight = *p;
-    double ydot[MODEL_NSTATE];
+    double ydot[MODEL_NMOTION];  /* the motion's alone: the works and impulses play no part */
     free_flight.point[point].phase = MODEL_PHASE_FREE;
-    if (model_rhs(t, y, ydot, &free_flight) != 0) return 0;
+    if (model_motion_rhs(t, y, ydot, &free_flight) != 0) return 0;
     return model_delta_acceleration(point, y, ydot, &free_flight) > MODEL_TANGENTIAL_TOLERANCE * fmax(p->g, 1.0);
 }
 
@@ -154,12 +154,7 @@ int model_machine_start(model_machine *m, model_params *p, double t, const doubl
 {
     memset(m, 0, sizeof *m);
     m->run_to_time = run_to_time;
-    double y_s = p->surface_height;
-    if (p->surface_initial != 0.0) {  /* the surface is where the tip starts */
-        double out[MODEL_NOUT];
-        model_outputs(t, y, out, p);
-        y_s = out[MODEL_OUT_y_B];
-    }
+    const double y_s = model_surface_at_start(p, y);
     for (int point = 0; point < MODEL_NCONTACT; ++point) starts_free(m, p, point, y_s);
     int start = MODEL_START_FREE;
     for (int point = 0; point < MODEL_NCONTACT; ++point) start = starts_at(m, p, point, t, y);  /* the tip's last */
@@ -488,7 +483,7 @@ int model_machine_start_inside(const model_params *p, const double *y, double *d
     double h[MODEL_NPOINT];
     model_heights(y, h, p);  /* above the tip's surface level p->point[TIP].y_s */
     const double y_tip = h[MODEL_NPOINT - 1] + p->point[TIP].y_s;  /* heights above the pivot */
-    const double y_s = p->surface_initial != 0.0 ? y_tip : p->surface_height;
+    const double y_s = model_surface_at_start(p, y);
     const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, model_chain_length(p));
     if (y_s - y_tip > slack) {  /* the tip first, as the scene checks it (a surface set by its height) */
         *depth = y_s - y_tip;
