@@ -331,8 +331,7 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
         joints=joints,
         point_fields=tuple(o for o, _ in POINT_OUTPUTS),
         contact_points=contact_points,
-        event_points=tuple(k for e in range(len(model.events) * len(contact_points)) for k, point in
-                           enumerate(contact_points) if point["first_event"] <= e < point["first_event"] + len(model.events)),
+        event_points=_event_points(contact_points, len(model.events)),
     )
 
 
@@ -373,6 +372,15 @@ def _contact_points(model: ModelExpressions, output_names: list[str]) -> tuple[d
         points.append({"name": name, "radius": radius, "number": pm.number, "first_event": first_event,
                        "outputs": [output_names.index(o) if o in output_names else -1 for o in names]})
     return tuple(points)
+
+
+def _event_points(contact_points: tuple[dict, ...], per_point: int) -> tuple[int, ...]:
+    """The point (params.point[k]) each event is of: point k's `per_point` events start at its
+    first_event."""
+    owner = [0] * (per_point * len(contact_points))
+    for k, point in enumerate(contact_points):
+        owner[point["first_event"]:point["first_event"] + per_point] = [k] * per_point
+    return tuple(owner)
 
 
 def _net(model: ModelExpressions, t) -> dict:
