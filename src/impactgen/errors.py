@@ -118,10 +118,15 @@ class ImpactgenWarning(UserWarning):
     """Something asked for was not done as asked, and what was done instead (the work goes on)."""
 
 
-def warn(message: str) -> None:
-    """Warn with `ImpactgenWarning`, attributed to the first caller outside impactgen (the
-    user's line, not the library's)."""
+class ValidityWarning(ImpactgenWarning):
+    """A result computed outside what the contact law's fits cover (the run is kept, its
+    figures are to be read with care): the warnings a run lists in `warnings`."""
+
+
+def warn(message: str, category: type[ImpactgenWarning] = ImpactgenWarning) -> None:
+    """Warn with `category`, attributed to the first caller outside impactgen (the user's
+    line, not the library's)."""
     level, frame = 2, sys._getframe(1)
     while frame is not None and frame.f_globals.get("__name__", "").startswith("impactgen."):
         frame, level = frame.f_back, level + 1
-    warnings.warn(message, ImpactgenWarning, stacklevel=level)
+    warnings.warn(message, category, stacklevel=level)
