@@ -158,6 +158,14 @@ def build_parser() -> argparse.ArgumentParser:
     fmu.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     fmu.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    paper = sub.add_parser("paper-table", help="the paper's Table 2 computed again, beside the published values",
+                           description="Run the paper's case for each omega20 of its Table 2 and print delta_r "
+                           "and Delta T (with the physical friction and with friction_mode = \"frozen\") beside "
+                           "the published values, with their relative errors (impactgen.paper.paper_table).")
+    paper.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    paper.add_argument("--json", action="store_true", help="print the rows as one JSON object")
+    paper.add_argument("--debug", action="store_true", help="show tracebacks")
+
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path, help=SCENE_HELP)
     gen.add_argument("--out", type=Path, help="folder for the C files (default generated/<name>)")
