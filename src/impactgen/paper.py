@@ -106,13 +106,13 @@ def paper_table(engine: str = "c") -> Any:
 
 def format_paper_table(rows: list[dict[str, float]]) -> list[str]:
     """The rows as `impactgen paper-table` prints them."""
-    lines = ["omega20  delta_r (m)  paper      error    Delta T (J): regularized  frozen   paper   "
-             "frozen error   P_max (N)  t_contact (s)"]
+    lines = [f"{'omega20':>7}  {'delta_r (m)':>11} {'paper':>10} {'error':>8}   {'Delta T (J)':>11} "
+             f"{'frozen':>7} {'paper':>6} {'error':>8}   {'P_max (N)':>9} {'t_contact (s)':>13}"]
     for r in rows:
-        lines.append(f"{r['omega20']:7.1f}  {r['delta_r']:.4g}  {r['delta_r_paper']:.4g}  "
-                     f"{100 * r['delta_r_error']:+6.2f} %   {r['delta_T']:24.4f}  {r['delta_T_frozen']:.4f}  "
-                     f"{r['delta_T_paper']:.3f}  {100 * r['delta_T_frozen_error']:+8.2f} %   "
-                     f"{r['P_max']:9.1f}  {r['t_contact']:.4g}")
-    lines.append("Delta T: the published values are rounded; the physical (regularized) friction gives about "
-                 "15 % more, friction_mode = \"frozen\" reproduces them (docs/model.md)")
+        lines.append(f"{r['omega20']:7.1f}  {r['delta_r']:11.3e} {r['delta_r_paper']:10.3e} "
+                     f"{100 * r['delta_r_error']:+7.2f}%   {r['delta_T']:11.4f} {r['delta_T_frozen']:7.4f} "
+                     f"{r['delta_T_paper']:6.3f} {100 * r['delta_T_frozen_error']:+7.2f}%   "
+                     f"{r['P_max']:9.1f} {r['t_contact']:13.4e}")
+    lines.append("Delta T: with the physical (regularized) friction, and with friction_mode = \"frozen\", which "
+                 "reproduces the published values (rounded; docs/model.md); error: computed / published - 1")
     return lines

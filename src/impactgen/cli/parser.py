@@ -158,6 +158,13 @@ def build_parser() -> argparse.ArgumentParser:
     fmu.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     fmu.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    mat = sub.add_parser("materials", help="list the named materials a scene may give (rod.material, surface.material)",
+                         description="The named materials with their Young's modulus, Poisson's ratio, yield "
+                         "strength, density and source. A scene names one with rod.material = \"NAME\" or "
+                         "surface.material = \"NAME\"; a key given beside it overrides its value.")
+    mat.add_argument("--json", action="store_true", help="print the table as one JSON object")
+    mat.add_argument("--debug", action="store_true", help="show tracebacks")
+
     paper = sub.add_parser("paper-table", help="the paper's Table 2 computed again, beside the published values",
                            description="Run the paper's case for each omega20 of its Table 2 and print delta_r "
                            "and Delta T (with the physical friction and with friction_mode = \"frozen\") beside "
