@@ -47,9 +47,14 @@ def test_a_key_given_beside_a_material_overrides_its_value():
     scene = _by_material(rod="aluminium-6061-t6", **{"rod.yield_strength": 200e6})
     assert scene.rod.E == ALUMINIUM.E and scene.rod.yield_strength == 200e6
     assert scene.to_dict()["rod"] == {"material": "aluminium-6061-t6", "yield_strength": 200e6, "tip_radius": 0.005}
-    # another material keeps the key given, and takes the rest from the new one
-    brass = scene.replace({"rod.material": "brass-c36000"})
-    assert brass.rod.E == MATERIALS["brass-c36000"].E and brass.rod.yield_strength == 200e6
+    # an override of the material replaces the values the scene gave, but for those it gives too
+    brass = MATERIALS["brass-c36000"]
+    assert scene.replace({"rod.material": brass.name}).rod == impactgen.scene.Material(
+        brass.E, brass.nu, brass.yield_strength, brass.name, brass.density)
+    assert scene.replace({"rod.yield_strength": 1e8, "rod.material": brass.name}).rod.yield_strength == 1e8
+    typed = impactgen.load_scene("paper", {"rod.material": "aluminium-6061-t6"})  # the paper's scene types E, ...
+    assert (typed.rod.E, typed.rod.nu, typed.rod.yield_strength) == (ALUMINIUM.E, ALUMINIUM.nu, ALUMINIUM.yield_strength)
+    assert typed.surface.E == 210e9
     assert impactgen.scene_from_dict(scene.to_dict()) == scene
     assert impactgen.scene.scene_from_text(scene.to_toml()) == scene
 
@@ -129,10 +134,12 @@ def test_an_override_of_the_masses_replaces_the_cross_section_and_back():
 def test_the_scene_reads_and_round_trips_every_key_by_material():
     scene = _by_material(rod="ti-6al-4v", **{"chain.area": [1e-4, 2e-4], "rod.nu": 0.3})
     for key in scene.keys():
-        if key not in ("initial.q_deg", "contact.joint_radius", "chain.mass"):
+        if key not in ("initial.q_deg", "contact.joint_radius", "chain.mass", "rod.material"):
             assert scene.replace({key: scene[key]}) == scene, key
     typed = scene.replace({"chain.mass": scene["chain.mass"]})  # the masses typed replace the cross-section
     assert typed.chain.mass == scene.chain.mass and typed.chain.area is None
+    again = scene.replace({"rod.material": "ti-6al-4v"})  # the material again: its own nu, not the one given
+    assert again.rod.nu == MATERIALS["ti-6al-4v"].nu and again.rod.E == scene.rod.E
     assert impactgen.scene_from_dict(scene.to_dict()) == scene
 
 
@@ -142,3 +149,16 @@ def test_impactgen_materials_lists_the_table():
     for m in MATERIALS.values():
         line = next(line for line in res.stdout.splitlines() if line.startswith(m.name + " "))
         assert f"{m.E / 1e9:.1f}" in line and m.source in line
+
+
+def test_a_sweep_over_materials_runs_each_material():
+    """Varying rod.material over the paper's scene (which types E, nu and the yield strength)
+    runs each material, not the typed values: the override replaces them."""
+    pytest.importorskip("pandas")
+    names = ["steel-paper", "aluminium-6061-t6"]
+    table = impactgen.sweep("paper", vary={"rod.material": names}, workers=1)
+    assert list(table["status"]) == ["ok", "ok"]
+    for name, (_, row) in zip(names, table.iterrows()):
+        alone = impactgen.simulate(impactgen.load_scene("paper", {"rod.material": name}))
+        assert row["delta_r"] == alone.summary["delta_r"]
+    assert table["delta_r"].iloc[1] > 2 * table["delta_r"].iloc[0]  # the softer rod yields more

@@ -13,6 +13,7 @@ except ModuleNotFoundError:  # pragma: no cover - exercised on 3.10 only
     import tomli as tomllib  # type: ignore[no-redef]
 
 from ..errors import SceneError
+from ..materials import MATERIAL_KEYS
 from .schema import SCHEMA, split_key
 from .values import plain
 
@@ -60,7 +61,9 @@ ALTERNATIVES = (("initial.q", "initial.q_deg"), MASS_KEYS)
 def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
     """Set each dotted key of `overrides` in the scene `raw` (nested dicts): one element of a
     list too; None unsets a key (back to its default, or missing). A key of `ALTERNATIVES`
-    replaces the others of its group; of `MASS_KEYS` the same overrides give one."""
+    replaces the others of its group; of `MASS_KEYS` the same overrides give one. A material
+    (``rod.material``) replaces the values the table gave, but for those the same overrides
+    give: it is the material a sweep or `--set` asks for."""
     keys = {".".join(split_key(dotted)[:2]) for dotted, value in overrides.items() if value is not None}
     given = [key for key in MASS_KEYS if key in keys]
     if len(given) > 1:
@@ -83,6 +86,10 @@ def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
         for other in group:  # one of the group replaces the others
             if other != name:
                 target.pop(other.rpartition(".")[2], None)
+        if key == "material":
+            for value_key in MATERIAL_KEYS:
+                if f"{section}.{value_key}" not in keys:
+                    target.pop(value_key, None)
 
 
 def _with_element(dotted: str, root: dict[str, Any], target: dict[str, Any], section: str, key: str,
