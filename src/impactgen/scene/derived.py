@@ -16,6 +16,7 @@ from ..materials import MATERIAL_KEYS, MATERIALS
 from .schema import SCHEMA, positive
 from .values import coerce, plain
 
+
 def fill_from_material(section: str, table: dict[str, Any]) -> None:
     """Put the values of the table's named material (if it names one) into `table` where it
     gives none: E, nu and yield_strength, and for the rod its density."""

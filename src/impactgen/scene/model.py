@@ -8,8 +8,9 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from ..errors import SceneError
-from ..materials import MATERIALS
+from ..materials import MATERIAL_KEYS, MATERIALS
 from .schema import SCHEMA, all_keys, did_you_mean, split_key
+
 
 class _KeyHint:
     """An attribute a scene part does not have ends in an AttributeError that names the
@@ -261,7 +262,7 @@ def _stated_material(part: Material) -> dict[str, Any]:
     that differ from the material's (all of them without one)."""
     named = MATERIALS.get(part.material) if part.material is not None else None
     stated: dict[str, Any] = {} if named is None else {"material": part.material}
-    for key in ("E", "nu", "yield_strength", "density"):
+    for key in MATERIAL_KEYS:
         value = getattr(part, key)
         if value is not None and (named is None or value != getattr(named, key)):
             stated[key] = value
