@@ -162,3 +162,15 @@ def test_a_sweep_over_materials_runs_each_material():
         alone = impactgen.simulate(impactgen.load_scene("paper", {"rod.material": name}))
         assert row["delta_r"] == alone.summary["delta_r"]
     assert table["delta_r"].iloc[1] > 2 * table["delta_r"].iloc[0]  # the softer rod yields more
+
+
+def test_the_table_in_docs_scene_md_states_the_materials_values():
+    """docs/scene.md repeats the table for readers: its numbers are MATERIALS'."""
+    from conftest import ROOT
+    rows = [line.split("|")[1:-1] for line in (ROOT / "docs" / "scene.md").read_text().splitlines()
+            if line.startswith("| `") and line.split("|")[1].strip(" `") in MATERIALS]
+    assert [r[0].strip(" `") for r in rows] == list(MATERIALS)
+    for cells in rows:
+        m = MATERIALS[cells[0].strip(" `")]
+        E, nu, yield_mpa, density = (float(c) for c in cells[1:5])
+        assert (E * 1e9, nu, yield_mpa * 1e6, density) == pytest.approx((m.E, m.nu, m.yield_strength, m.density))
