@@ -304,6 +304,12 @@ def test_an_attribute_the_scene_lacks_names_the_dotted_key_meant(attribute, key)
     assert scene[key] is not None or key == "rod.density"
 
 
+def test_the_initial_table_is_named_by_its_keys():
+    with pytest.raises(AttributeError, match=re.escape("(the [initial] table's keys: initial.q_deg, initial.q, "
+                                                       "initial.u)")):
+        impactgen.load_scene("paper").initial
+
+
 def test_a_scene_still_pickles_and_copies():
     import copy
     import pickle

@@ -21,7 +21,10 @@ class _KeyHint:
     def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):  # copy, pickle and numpy probe such names: no hint, no cost
             raise AttributeError(name)
-        hint = did_you_mean(f"{self._section}.{name}" if self._section else name)
+        if not self._section and name in SCHEMA:  # a table of the file that is no field: [initial]
+            hint = f" (the [{name}] table's keys: {', '.join(f'{name}.{key}' for key in SCHEMA[name])})"
+        else:
+            hint = did_you_mean(f"{self._section}.{name}" if self._section else name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}; a scene's values are "
                              f"read by their dotted keys, as the file names them: scene['section.key']{hint}")
 
