@@ -280,3 +280,39 @@ def test_a_scene_is_read_by_key_not_iterated():
 def test_an_unknown_key_suggests_the_key_meant(typed, meant):
     with pytest.raises(SceneError, match=re.escape(f"did you mean '{meant}'?")):
         impactgen.load_scene("paper", {typed: 1.0})
+
+
+def test_get_gives_the_default_for_a_key_left_unset_never_for_an_unknown_one():
+    scene = impactgen.load_scene("paper")
+    assert scene.get("surface.height", 0.0) == "initial" and scene.get("rod.tip_radius", 1.0) == 0.005
+    assert scene["rod.material"] is None and scene.get("rod.material", "typed") == "typed"
+    assert scene.get("chain.diameter") is None and scene.get("rod.density", 7800.0) == 7800.0
+    with pytest.raises(SceneError, match=re.escape("surface.heigth: unknown key (did you mean 'surface.height'?)")):
+        scene.get("surface.heigth", 0.0)
+
+
+@pytest.mark.parametrize("attribute, key", [
+    ("surface.height", "surface.height"), ("rod.tip_radius", "rod.tip_radius"), ("q_deg", "initial.q_deg"),
+    ("contact.mu", "contact.friction"), ("chain.density", "rod.density"), ("height", "surface.height"),
+])
+def test_an_attribute_the_scene_lacks_names_the_dotted_key_meant(attribute, key):
+    """scene.surface.height is not an attribute: the error says how to read it."""
+    scene = impactgen.load_scene("paper")
+    part, _, name = attribute.rpartition(".")
+    with pytest.raises(AttributeError, match=re.escape(f"scene['section.key'] (did you mean '{key}'?)")):
+        getattr(getattr(scene, part) if part else scene, name)
+    assert scene[key] is not None or key == "rod.density"
+
+
+def test_the_initial_table_is_named_by_its_keys():
+    with pytest.raises(AttributeError, match=re.escape("(the [initial] table's keys: initial.q_deg, initial.q, "
+                                                       "initial.u)")):
+        impactgen.load_scene("paper").initial
+
+
+def test_a_scene_still_pickles_and_copies():
+    import copy
+    import pickle
+    scene = impactgen.load_scene("paper", {"rod.material": "steel-paper", "chain.diameter": 0.01})
+    assert pickle.loads(pickle.dumps(scene)) == scene == copy.deepcopy(scene)
+    assert not hasattr(scene.rod, "height") and hasattr(scene.rod, "density")

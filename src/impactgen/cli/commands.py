@@ -287,6 +287,30 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _materials(args: argparse.Namespace) -> int:
+    """impactgen materials: the table of named materials."""
+    import dataclasses
+
+    from ..materials import MATERIALS, format_materials
+    if args.json:
+        units = {"E": "Pa", "nu": "1", "yield_strength": "Pa", "density": "kg/m^3"}
+        print(json.dumps({"units": units, "materials": [dataclasses.asdict(m) for m in MATERIALS.values()]}))
+    else:
+        print("\n".join(format_materials()))
+    return 0
+
+
+def _paper_table(args: argparse.Namespace) -> int:
+    """impactgen paper-table: the paper's Table 2 computed again, beside the published values."""
+    from ..paper import COLUMNS, format_paper_table, paper_rows
+    rows = paper_rows(args.engine)
+    if args.json:
+        print(json.dumps({"engine": args.engine, "units": COLUMNS, "rows": rows}))
+    else:
+        print("\n".join(format_paper_table(rows)))
+    return 0
+
+
 def _generate(args: argparse.Namespace) -> int:
     from ..scene import load_scene
     scene = load_scene(args.scene, _overrides(args.set))
@@ -304,4 +328,5 @@ def links(args: argparse.Namespace) -> int:
 
 COMMANDS = {"run": _run, "examples": _examples, "sweep": _sweep, "crosscheck": _crosscheck, "plot": _plot,
             "animate": _animate, "stability": _stability, "compare": _compare, "bench": _bench, "fmu": _fmu,
-            "generate": _generate}
+            "generate": _generate, "paper-table": _paper_table,
+            "materials": _materials}

@@ -158,6 +158,21 @@ def build_parser() -> argparse.ArgumentParser:
     fmu.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     fmu.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    mat = sub.add_parser("materials", help="list the named materials a scene may give (rod.material, surface.material)",
+                         description="The named materials with their Young's modulus, Poisson's ratio, yield "
+                         "strength, density and source. A scene names one with rod.material = \"NAME\" or "
+                         "surface.material = \"NAME\"; a key given beside it overrides its value.")
+    mat.add_argument("--json", action="store_true", help="print the table as one JSON object")
+    mat.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    paper = sub.add_parser("paper-table", help="the paper's Table 2 computed again, beside the published values",
+                           description="Run the paper's case for each omega20 of its Table 2 and print delta_r "
+                           "and Delta T (with the physical friction and with friction_mode = \"frozen\") beside "
+                           "the published values, with their relative errors (impactgen.paper.paper_table).")
+    paper.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    paper.add_argument("--json", action="store_true", help="print the rows as one JSON object")
+    paper.add_argument("--debug", action="store_true", help="show tracebacks")
+
     gen = sub.add_parser("generate", help="generate and compile the C a scene needs")
     gen.add_argument("scene", type=Path, help=SCENE_HELP)
     gen.add_argument("--out", type=Path, help="folder for the C files (default generated/<name>)")

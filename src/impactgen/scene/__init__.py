@@ -2,7 +2,8 @@
 
 The package holds one job per module: `schema` (every key, its kind, default and check),
 `values` (a value coerced and checked for its key), `overrides` (``KEY=VALUE`` and dotted
-keys applied to a scene before it is checked), `physics` (the checks across keys), `model`
+keys applied to a scene before it is checked), `derived` (the keys a named material or a
+cross-section gives), `physics` (the checks across keys), `model`
 (the frozen Scene, read by the same dotted keys), `loading` (files, text, dicts) and
 `updates` (a checked scene with some keys changed). Every error names the key.
 

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..errors import SceneError
+from .derived import fill_from_material, link_masses
 from .model import Chain, Contact, Material, Scene, Solver
 from .overrides import apply_overrides, checked_overrides, tables_copied, tomllib
 from .physics import check_physics
@@ -59,9 +60,15 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
 
     name = get("", "name")
     n = get("chain", "links")
-    chain = Chain(n, get("chain", "length", n), get("chain", "mass", n), get("chain", "gravity"))
-    rod = Material(get("rod", "E"), get("rod", "nu"), get("rod", "yield_strength"))
-    surface = Material(get("surface", "E"), get("surface", "nu"), get("surface", "yield_strength"))
+    for section in ("rod", "surface"):
+        fill_from_material(section, sections[section])
+    rod = Material(get("rod", "E"), get("rod", "nu"), get("rod", "yield_strength"), get("rod", "material"),
+                   get("rod", "density"))
+    surface = Material(get("surface", "E"), get("surface", "nu"), get("surface", "yield_strength"),
+                       get("surface", "material"))
+    length = get("chain", "length", n)
+    mass, diameter, area = link_masses(get, "mass" in sections["chain"], n, length, rod.density)
+    chain = Chain(n, length, mass, get("chain", "gravity"), diameter, area)
     contact = Contact(get("contact", "model"), get("contact", "friction"),
                       get("contact", "friction_mode"), get("contact", "friction_eps"),
                       get("contact", "joint_radius", n))

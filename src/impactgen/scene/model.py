@@ -8,27 +8,59 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from ..errors import SceneError
-from .schema import SCHEMA, all_keys, split_key
+from ..materials import MATERIAL_KEYS, MATERIALS
+from .schema import SCHEMA, all_keys, did_you_mean, split_key
+
+
+class _KeyHint:
+    """An attribute a scene part does not have ends in an AttributeError that names the
+    dotted key meant (`scene.surface.height` is ``scene["surface.height"]``)."""
+
+    _section = ""  # the scene file's table of this part ("" for the scene itself)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):  # copy, pickle and numpy probe such names: no hint, no cost
+            raise AttributeError(name)
+        if not self._section and name in SCHEMA:  # a table of the file that is no field: [initial]
+            hint = f" (the [{name}] table's keys: {', '.join(f'{name}.{key}' for key in SCHEMA[name])})"
+        else:
+            hint = did_you_mean(f"{self._section}.{name}" if self._section else name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}; a scene's values are "
+                             f"read by their dotted keys, as the file names them: scene['section.key']{hint}")
+
 
 @dataclass(frozen=True)
-class Material:
-    """Elastic and yield properties of one body in contact."""
+class Material(_KeyHint):
+    """Elastic and yield properties of one body in contact, the named material they default
+    to (``rod.material``, None if none) and, for the rod, its density (kg/m^3, None if
+    neither rod.density nor a material gives one)."""
 
     E: float
     nu: float
     yield_strength: float
+    material: str | None = None
+    density: float | None = None
+
+    _section = "rod"  # the surface's keys are the rod's but for height and density: one spelling
 
 
 @dataclass(frozen=True)
-class Chain:
+class Chain(_KeyHint):
+    """The links: their number, lengths and masses (given, or rod.density x cross-section x
+    length where `diameter` or `area`, one per link, is given) and gravity."""
+
     links: int
     length: tuple[float, ...]
     mass: tuple[float, ...]
     gravity: float
+    diameter: tuple[float, ...] | None = None
+    area: tuple[float, ...] | None = None
+
+    _section = "chain"
 
 
 @dataclass(frozen=True)
-class Contact:
+class Contact(_KeyHint):
     model: str
     friction: float
     friction_mode: str
@@ -36,9 +68,11 @@ class Contact:
     # contact.joint_radius as given, one per joint (n - 1); None: every joint has the tip's radius
     joint_radius: tuple[float, ...] | None = None
 
+    _section = "contact"
+
 
 @dataclass(frozen=True)
-class Solver:
+class Solver(_KeyHint):
     method: str
     jacobian: str  # "analytic" | "difference" (auto resolved by the method)
     rtol: float
@@ -49,9 +83,11 @@ class Solver:
     sustained_contact: bool = True  # with t_end a time: hold the tip once impacts chatter
     jacobian_setting: str = "auto"  # the key as given, before "auto" was resolved into `jacobian`
 
+    _section = "solver"
+
 
 @dataclass(frozen=True)
-class Scene:
+class Scene(_KeyHint):
     """A checked scene. Angles are radians; `surface_height` None means 'initial'."""
 
     name: str
@@ -124,10 +160,13 @@ class Scene:
                                   f"(one per {per}, numbered from 1)")
         return value[index - 1]
 
-    def get(self, key: str) -> Any:
-        """The value of a scene key: the same as ``scene[key]``. A checked scene has a value
-        for every key, so there is no default: an unknown key raises `SceneError`."""
-        return self[key]
+    def get(self, key: str, default: Any = None) -> Any:
+        """The value of a scene key, as ``scene[key]``; `default` where the scene leaves the
+        key unset (``rod.material``, ``rod.density``, ``chain.diameter`` and ``chain.area``
+        may be None). An unknown key still raises `SceneError`, never gives `default`: a
+        misspelt key is not a missing one."""
+        value = self[key]
+        return default if value is None else value
 
     def keys(self) -> tuple[str, ...]:
         """Every key the scene can be read (and changed) by, without element indices."""
@@ -162,15 +201,13 @@ class Scene:
     def to_dict(self) -> dict[str, Any]:
         """The scene as nested dicts of plain values, as a TOML file states it (angles in
         radians): `scene_from_dict(scene.to_dict())` gives the same scene."""
-        s = self.solver
+        s, chain = self.solver, self.chain
         return {
             "name": self.name,
-            "chain": {"links": self.chain.links, "length": list(self.chain.length),
-                      "mass": list(self.chain.mass), "gravity": self.chain.gravity},
-            "rod": {"E": self.rod.E, "nu": self.rod.nu, "yield_strength": self.rod.yield_strength,
-                    "tip_radius": self.tip_radius},
-            "surface": {"E": self.surface.E, "nu": self.surface.nu,
-                        "yield_strength": self.surface.yield_strength,
+            "chain": {"links": chain.links, "length": list(chain.length), **_stated_masses(chain),
+                      "gravity": chain.gravity},
+            "rod": {**_stated_material(self.rod), "tip_radius": self.tip_radius},
+            "surface": {**_stated_material(self.surface),
                         "height": "initial" if self.surface_height is None else self.surface_height},
             "contact": {"model": self.contact.model, "friction": self.contact.friction,
                         "friction_mode": self.contact.friction_mode,
@@ -202,8 +239,37 @@ def _whole_value(scene: Scene, section: str, key: str) -> Any:
         return angles[key]
     if section == "contact" and key == "joint_radius":
         return list(scene.joint_radii)
+    if section in ("chain", "rod", "surface") and key in _RESOLVED:  # given, or from a key that gives it
+        value = getattr(getattr(scene, section), key)
+        return list(value) if isinstance(value, tuple) else value
     stated = scene.to_dict()
-    return (stated[section] if section else stated)[key]
+    return (stated[section] if section else stated).get(key)  # a key left unset: None
+
+
+# The keys a scene reads as resolved (the masses from a cross-section, a material's values),
+# which the file may not state: read from the fields, not from `to_dict`.
+_RESOLVED = ("mass", "diameter", "area", "material", "E", "nu", "yield_strength", "density")
+
+
+def _stated_masses(chain: Chain) -> dict[str, list[float]]:
+    """How the file states the links' masses: the cross-section they come from, or the masses."""
+    if chain.diameter is not None:
+        return {"diameter": list(chain.diameter)}
+    if chain.area is not None:
+        return {"area": list(chain.area)}
+    return {"mass": list(chain.mass)}
+
+
+def _stated_material(part: Material) -> dict[str, Any]:
+    """The keys of a [rod] or [surface] table that state `part`: its material, and the values
+    that differ from the material's (all of them without one)."""
+    named = MATERIALS.get(part.material) if part.material is not None else None
+    stated: dict[str, Any] = {} if named is None else {"material": part.material}
+    for key in MATERIAL_KEYS:
+        value = getattr(part, key)
+        if value is not None and (named is None or value != getattr(named, key)):
+            stated[key] = value
+    return stated
 
 
 def _toml_value(v: Any) -> str:

@@ -13,6 +13,7 @@ except ModuleNotFoundError:  # pragma: no cover - exercised on 3.10 only
     import tomli as tomllib  # type: ignore[no-redef]
 
 from ..errors import SceneError
+from ..materials import MATERIAL_KEYS
 from .schema import SCHEMA, split_key
 from .values import plain
 
@@ -50,18 +51,45 @@ def checked_overrides(overrides: Any) -> Mapping[str, Any]:
     return overrides
 
 
+# The keys that give the links' masses: the masses, or the cross-section they come from
+MASS_KEYS = ("chain.mass", "chain.diameter", "chain.area")
+# Keys of which a scene states one, so that overriding one replaces the others: the initial
+# angles in radians or in degrees; the links' masses.
+ALTERNATIVES = (("initial.q", "initial.q_deg"), MASS_KEYS)
+
+
 def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> None:
+    """Set each dotted key of `overrides` in the scene `raw` (nested dicts): one element of a
+    list too; None unsets a key (back to its default, or missing). A key of `ALTERNATIVES`
+    replaces the others of its group; of `MASS_KEYS` the same overrides give one. A material
+    (``rod.material``) replaces the values the table gave, but for those the same overrides
+    give: it is the material a sweep or `--set` asks for."""
+    keys = {".".join(split_key(dotted)[:2]) for dotted, value in overrides.items() if value is not None}
+    given = [key for key in MASS_KEYS if key in keys]
+    if len(given) > 1:
+        raise SceneError(given[1], f"the links' masses are given twice, by {' and '.join(given)}: give one "
+                                   "(the masses, or the cross-section with rod.density)")
     for dotted, value in overrides.items():
         section, key, index = split_key(dotted)
+        name = f"{section}.{key}" if section else key
+        group = next((g for g in ALTERNATIVES if name in g), ())
         target = raw.setdefault(section, {}) if section else raw
         if not isinstance(target, dict):
             raise SceneError(section, "expected a table")
         value = plain(value)
+        if value is None and index is None:
+            target.pop(key, None)
+            continue
         if index is not None:
             value = _with_element(dotted, raw, target, section, key, index, value)
         target[key] = value
-        if key in ("q", "q_deg") and section == "initial":  # one overrides the other
-            target.pop("q_deg" if key == "q" else "q", None)
+        for other in group:  # one of the group replaces the others
+            if other != name:
+                target.pop(other.rpartition(".")[2], None)
+        if key == "material":
+            for value_key in MATERIAL_KEYS:
+                if f"{section}.{value_key}" not in keys:
+                    target.pop(value_key, None)
 
 
 def _with_element(dotted: str, root: dict[str, Any], target: dict[str, Any], section: str, key: str,

@@ -13,6 +13,7 @@ from typing import Any, Callable
 
 from ..codegen.parameters import PARAMETERS
 from ..errors import SceneError
+from ..materials import MATERIAL_NAMES
 
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 CONTACT_MODELS = ("three-phase", "hertz")
@@ -32,6 +33,7 @@ JACOBIAN_AUTO_MAX_LINKS = 6
 
 
 MISSING = object()  # the default of a key the scene must give
+MATERIAL_DOC = "a named material ('impactgen materials'): its values where the keys are not given"
 
 
 # --------------------------------------------------------------------------- checks
@@ -78,19 +80,28 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "chain": {
         "links": Key("int", check=lambda v: None if 1 <= v <= 60 else "must be between 1 and 60"),
         "length": Key("floats", check=_physical("chain.length"), doc="m; one number or a list of n"),
-        "mass": Key("floats", check=_physical("chain.mass"), doc="kg; one number or a list of n"),
+        "mass": Key("floats", check=_physical("chain.mass"),
+                    doc="kg; one number or a list of n; or give chain.diameter or chain.area"),
         "gravity": Key("float", 9.81, _physical("chain.gravity"), doc="m/s^2", symbols=("g",)),
+        # the links' cross-section: their masses are then rod.density x area x length
+        "diameter": Key("floats", None, positive, doc="m; a round bar's, one number or a list of n"),
+        "area": Key("floats", None, positive, doc="m^2; one number or a list of n"),
     },
     "rod": {
-        "E": Key("float", check=_physical("rod.E"), doc="Pa"),
-        "nu": Key("float", check=_physical("rod.nu")),
-        "yield_strength": Key("float", check=_physical("rod.yield_strength"), doc="Pa", symbols=("S_y",)),
+        "material": Key("str", None, choices=MATERIAL_NAMES, doc=MATERIAL_DOC),
+        "E": Key("float", check=_physical("rod.E"), doc="Pa; or give rod.material"),
+        "nu": Key("float", check=_physical("rod.nu"), doc="dimensionless; or give rod.material"),
+        "yield_strength": Key("float", check=_physical("rod.yield_strength"), doc="Pa; or give rod.material",
+                              symbols=("S_y",)),
+        "density": Key("float", None, positive, doc="kg/m^3; default rod.material's", symbols=("rho",)),
         "tip_radius": Key("float", check=_physical("rod.tip_radius"), doc="m"),
     },
     "surface": {
-        "E": Key("float", check=_physical("surface.E"), doc="Pa"),
-        "nu": Key("float", check=_physical("surface.nu")),
-        "yield_strength": Key("float", check=_physical("surface.yield_strength"), doc="Pa", symbols=("S_y",)),
+        "material": Key("str", None, choices=MATERIAL_NAMES, doc=MATERIAL_DOC),
+        "E": Key("float", check=_physical("surface.E"), doc="Pa; or give surface.material"),
+        "nu": Key("float", check=_physical("surface.nu"), doc="dimensionless; or give surface.material"),
+        "yield_strength": Key("float", check=_physical("surface.yield_strength"),
+                              doc="Pa; or give surface.material", symbols=("S_y",)),
         "height": Key("height", "initial", doc='"initial" or a number in m'),
     },
     "contact": {

@@ -14,9 +14,13 @@ from .physics import check_physics
 from .schema import resolve_jacobian, split_key
 from .values import check_split
 
-# The key whose new value re-decides other fields (the links size every list): a case that
-# changes it is read in full.
-_REREAD = {"chain.links"}
+# The keys whose new value re-decides other fields (the links size every list; a material
+# gives E, nu, the yield strength and the density; a density and a cross-section give the
+# masses): a case that changes one is read in full.
+_REREAD = {"chain.links", "rod.material", "surface.material", "rod.density", "chain.diameter", "chain.area"}
+# ... and these too where the masses come from a cross-section (a length changes a mass; a
+# mass replaces the cross-section)
+_REREAD_WITH_SECTION = {"chain.length", "chain.mass"}
 _JOINT_RADIUS = "contact.joint_radius"  # a per-joint list: its elements are set like a link's
 _MATERIALS = {"E", "nu", "yield_strength"}  # the keys of a [rod] or [surface] Material
 # The keys `check_physics` reads: a case that changes none of them (a speed, a friction
@@ -42,10 +46,12 @@ def _changed(base: Scene, overrides: Mapping[str, Any]) -> Scene:
     n = base.chain.links
     lists: dict[str, list[float]] = {}  # q0, u0, length, mass: copied when a key changes one
     cross_checked = False
+    from_section = base.chain.diameter is not None or base.chain.area is not None  # masses from a cross-section
     for dotted, value in overrides.items():
         section, key, index = split_key(dotted)
         name = f"{section}.{key}" if section else key
-        if name in _REREAD or (index is not None and index > (n - 1 if name == _JOINT_RADIUS else n)):
+        if name in _REREAD or (from_section and name in _REREAD_WITH_SECTION) \
+                or (index is not None and index > (n - 1 if name == _JOINT_RADIUS else n)):
             return scene_from_dict(base.to_dict(), overrides, source=base.source)
         cross_checked = cross_checked or name in _CROSS_CHECKED
         checked = check_split(dotted, section, key, index, value, n)

@@ -2,11 +2,12 @@
 names the key (or the element) it was given for."""
 from __future__ import annotations
 
+import difflib
 import math
 from collections import abc
 from typing import Any, Iterable
 
-from ..errors import SceneError
+from ..errors import EXCERPT_CHARS, SceneError
 from .schema import NAME_PATTERN, SCHEMA, Key, positive, split_key
 
 # --------------------------------------------------------------------------- coercion
@@ -65,7 +66,9 @@ def coerce(key: str, v: Any, spec: Key, n: int) -> Any:
             raise SceneError(key, f"{v!r} is not a valid name: use 1 to 64 letters, digits, "
                                   "'-' and '_', starting with a letter or digit")
         if spec.choices and v not in spec.choices:
-            raise SceneError(key, f"{v!r} is not one of {', '.join(spec.choices)}")
+            close = difflib.get_close_matches(v, spec.choices, n=1, cutoff=0.5) if len(v) <= EXCERPT_CHARS else []
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise SceneError(key, f"{v!r} is not one of {', '.join(spec.choices)}{hint}")
         return v
     if spec.kind == "floats":  # one number for every link, or a list of n
         if isinstance(v, list):
