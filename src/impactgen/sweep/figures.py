@@ -1,7 +1,7 @@
 """Figures of a sweep, chosen by what it varied (the paper's Figures 9 to 12 among them).
 
 - kept trajectories: the kinetic energy T(t) of each case through its first impact (Figs. 9, 11);
-- Delta T against delta_r over the cases (Fig. 10a);
+- delta_T against delta_r over the cases (Fig. 10a);
 - one or two varied keys (a grid): the summary fields against the first key's values, one
   line per value of the second (delta_r against |omega20| is Fig. 10b, against q20 Fig. 12);
   an angular speed whose values are all <= 0 is drawn against its magnitude, as the paper does;
