@@ -32,7 +32,7 @@ def coefficient_figure(plt, ok, folder: Path) -> list[Path]:
     if speed[have].max() > LOG_SPAN * speed[have].min():
         ax.set_xscale("log")
     ax.set_xlabel(f"|v_n0|, normal impact speed ({COEFFICIENT_UNITS['v_n0']})")
-    ax.set_ylabel(f"e_N, e_P, e_E, coefficients of restitution ({COEFFICIENT_UNITS['e_N']})")
+    ax.set_ylabel(f"e_N, e_P, e_E ({COEFFICIENT_UNITS['e_N']})")
     ax.set_title("coefficients of restitution against impact speed")
     ax.grid(alpha=0.3, which="both")
     ax.legend()
