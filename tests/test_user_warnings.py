@@ -62,3 +62,9 @@ def test_the_command_line_prints_each_warning_once_as_one_line(command, capsys):
     err = capsys.readouterr().err.splitlines()
     said = [line for line in err if BEYOND in line]
     assert len(said) == 1 and said[0].startswith("impactgen: warning: "), err
+
+
+def test_t_eval_times_left_out_are_an_impactgen_warning_not_a_validity_one():
+    with pytest.warns(ImpactgenWarning, match="t_eval times lie after the run's end") as said:
+        result = impactgen.simulate("paper", t_eval=[0.0, 1e-4, 1.0])
+    assert [w.category for w in said] == [ImpactgenWarning] and len(result.warnings) == 1

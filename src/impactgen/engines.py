@@ -14,7 +14,7 @@ from . import phases
 from .build import compile_model
 from .codegen.spec import STATES, ModelSpec
 from .dense import dropped_times_warning
-from .errors import SceneError, excerpt
+from .errors import ImpactgenWarning, SceneError, excerpt
 from .results import SimulationResult
 from .validity import issue_warnings
 from .scene import METHODS as C_METHODS
@@ -97,8 +97,9 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         always keeps its steps.
     warn : bool, default True
         Issue each of ``result.warnings`` through Python's `warnings` module as well, with
-        category `impactgen.errors.ValidityWarning`, attributed to the line that called
-        simulate(), so that a result outside the model's range is never silent. False keeps
+        category `impactgen.errors.ValidityWarning` (the t_eval times left out:
+        `ImpactgenWarning`), attributed to the line that called simulate(), so that a result
+        outside the model's range is never silent. False keeps
         them in ``result.warnings`` only: for a caller that reports them itself (the command
         line prints them; a sweep issues one warning with a count of its cases).
 
@@ -153,10 +154,13 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         from . import reference
         result = reference.simulate(replace_solver(scene, solver), _reference_method(method), t_eval=times,
                                     dense_output=bool(dense_output))
+    dropped = []  # t_eval's times after the run's end: not done as asked, but no validity issue
     if times is not None and len(result.t) < len(times):  # warnings are made once, then kept
-        result.warnings.extend(dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1])))
+        dropped = dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1]))
+        result.warnings.extend(dropped)
     if warn:
-        issue_warnings(result.warnings, scene.name)
+        issue_warnings(result.warnings[:len(result.warnings) - len(dropped)], scene.name)
+        issue_warnings(dropped, scene.name, ImpactgenWarning)
     return result
 
 
