@@ -46,14 +46,15 @@ def test_every_work_precision_line_has_its_own_colour_and_marker(tmp_path, monke
 def _labels(monkeypatch):
     """The axis labels of every figure plot_sweep saves, by file name."""
     from impactgen.sweep import figures
-    seen = {}
+    seen, legends = {}, {}
     saved = figures._save
 
     def save(plt, fig, path):
         seen[path.name] = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+        legends[path.name] = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
         return saved(plt, fig, path)
     monkeypatch.setattr(figures, "_save", save)
-    return seen
+    return seen, legends
 
 
 def _table(keys):
@@ -71,7 +72,7 @@ def _table(keys):
 def test_the_sweep_figures_label_every_axis_with_a_unit(tmp_path, monkeypatch):
     from impactgen.sweep import SweepSpec
     from impactgen.sweep.figures import plot_sweep
-    seen = _labels(monkeypatch)
+    seen, legends = _labels(monkeypatch)
     grid = {"initial.u[2]": [-0.2, -0.3, -0.4] * 2, "rod.E": [2e11] * 3 + [1e11] * 3}
     plot_sweep(_table(grid), SweepSpec.from_vary({"initial.u[2]": [-0.2, -0.3, -0.4], "rod.E": [2e11, 1e11]}),
                tmp_path)
@@ -80,6 +81,7 @@ def test_the_sweep_figures_label_every_axis_with_a_unit(tmp_path, monkeypatch):
                                            "contact.friction": "uniform(0,0.5)"}, random=6), tmp_path / "random")
     assert seen["t_contact_vs_initial_u2.png"] == [("|initial.u[2]| (rad/s)", "t_contact (s)")]
     assert seen["delta_T_vs_delta_r.png"] == [("delta_r (m)", "delta_T (J)")]
+    assert legends["delta_r_vs_initial_u2.png"] == ["rod.E = 1e+11 Pa", "rod.E = 2e+11 Pa"]
     assert seen["scatter_delta_r.png"] == [("initial.q_deg[2] (deg)", "delta_r (m)"),
                                            ("contact.friction (1)", "delta_r (m)")]
     for name, axes in seen.items():
@@ -101,3 +103,19 @@ def test_the_coefficient_figure_labels_its_axes_with_units(tmp_path, monkeypatch
     coefficient_figure(plt, frame, tmp_path)
     ax = drawn[0].axes[0]
     assert ax.get_xlabel().endswith("(m/s)") and ax.get_ylabel().endswith("(1)")
+
+
+def test_the_run_figures_name_the_fields_and_their_units(tmp_path, monkeypatch):
+    import impactgen
+    from impactgen import plots
+    plt = plots._pyplot()
+    drawn = []
+    monkeypatch.setattr(plt, "close", lambda fig: drawn.append(fig))
+    plots.plot_simulation(impactgen.simulate("paper"), tmp_path)
+    legends = [t.get_text() for fig in drawn for ax in fig.axes if ax.get_legend()
+               for t in ax.get_legend().get_texts()]
+    labels = [ax.get_ylabel() for fig in drawn for ax in fig.axes]
+    ticks = [t.get_text() for fig in drawn for ax in fig.axes for t in ax.get_xticklabels()]
+    assert {"u1", "u2", "q1", "v_Bx", "T"} <= set(legends) and not any("omega" in text for text in legends)
+    assert all(LABEL.search(label) for label in labels), labels
+    assert "delta_T = T0 - Tf" in ticks and not any("Delta" in t for t in ticks)

@@ -42,6 +42,12 @@ def labelled(name: str, unit: str | None) -> str:
     return f"{name} ({unit})" if unit else name
 
 
+def _value_label(key: str, value: float) -> str:
+    """A legend's entry for one value of a varied key, with its unit: "initial.u[2] = -0.2 rad/s"."""
+    unit = key_unit(key)
+    return f"{key} = {value:.4g}" + (f" {unit}" if unit and unit != "1" else "")
+
+
 def field_label(field: str) -> str:
     """A summary field's axis label: its name and unit, "t_contact (s)"."""
     return labelled(field, summary_unit(field))
@@ -106,7 +112,7 @@ def _grid_figures(plt, ok, spec: SweepSpec, folder: Path) -> list[Path]:
             x, label = _axis_values(part, first)
             order = np.argsort(x)
             ax.plot(x[order], part[field].to_numpy()[order], "o-", ms=4, lw=1,
-                    label=None if value is None else f"{spec.axes[1].key} = {value:g}")
+                    label=None if value is None else _value_label(spec.axes[1].key, value))
         ax.set_xlabel(label)
         ax.set_ylabel(field_label(field))
         ax.set_title(f"{field}, {words}, against {first}")
@@ -157,7 +163,7 @@ def _kinetic_energy(plt, ok, spec: SweepSpec, trajectories: Path, folder: Path) 
         if contact.empty:
             continue
         t0 = contact["t"].iloc[0]
-        label = ", ".join(f"{k} = {by_case.loc[case, k]:.4g}" for k in keys)
+        label = ", ".join(_value_label(k, by_case.loc[case, k]) for k in keys)
         ax.plot((contact["t"] - t0) * 1e3, contact["T"], lw=1.2, label=label)
     ax.set_xlabel("t from first contact (ms)")
     ax.set_ylabel("T, kinetic energy (J)")
