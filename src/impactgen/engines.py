@@ -16,9 +16,9 @@ from .codegen.spec import STATES, ModelSpec
 from .dense import dropped_times_warning
 from .errors import ImpactgenWarning, SceneError, excerpt
 from .results import SimulationResult
-from .validity import issue_warnings
 from .scene import METHODS as C_METHODS
 from .scene import TOUCH_TOLERANCE, Scene, Solver, joint_heights, load_scene, replace_solver, solver_with
+from .validity import issue_warnings
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
@@ -99,9 +99,9 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         Issue each of ``result.warnings`` through Python's `warnings` module as well, with
         category `impactgen.errors.ValidityWarning` (the t_eval times left out:
         `ImpactgenWarning`), attributed to the line that called simulate(), so that a result
-        outside the model's range is never silent. False keeps
-        them in ``result.warnings`` only: for a caller that reports them itself (the command
-        line prints them; a sweep issues one warning with a count of its cases).
+        outside the model's range is never silent. False keeps them in ``result.warnings``
+        only: for a caller that reports them itself (the command line prints them; a sweep
+        issues one warning with a count of its cases).
 
     Returns
     -------
