@@ -14,15 +14,16 @@ from . import phases
 from .build import compile_model
 from .codegen.spec import STATES, ModelSpec
 from .dense import dropped_times_warning
-from .errors import SceneError, excerpt
+from .errors import ImpactgenWarning, SceneError, excerpt
 from .results import SimulationResult
 from .scene import METHODS as C_METHODS
 from .scene import TOUCH_TOLERANCE, Scene, Solver, joint_heights, load_scene, replace_solver, solver_with
+from .validity import issue_warnings
 
 ENGINES = ("c", "reference")
 # simulate()'s solver settings, and the scene keys they override (both engines take them)
 SOLVER_OPTIONS = ("rtol", "atol", "max_steps", "t_end")  # simulate()'s keys of the scene's [solver]
-OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "record_steps")
+OPTIONS = ("engine", "method", *SOLVER_OPTIONS, "t_eval", "dense_output", "record_steps", "warn")
 
 
 def model_spec(scene: Scene, solver: Solver | None = None) -> ModelSpec:
@@ -55,7 +56,7 @@ def reachable_joints(scene: Scene) -> tuple[int, ...]:
 
 def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, max_steps: int | None = None, t_end: float | str | None = None,
-             t_eval: Any = None, dense_output: bool = False, record_steps: bool = True,
+             t_eval: Any = None, dense_output: bool = False, record_steps: bool = True, warn: bool = True,
              **unknown: Any) -> SimulationResult:
     """Simulate `scene` to its first separation, or to `solver.t_end`, and return the result.
 
@@ -94,6 +95,13 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         switch and the end: every summary, impact and phase span is the same (bit for bit,
         the steps being the same), at less cost; what a sweep uses. The reference engine
         always keeps its steps.
+    warn : bool, default True
+        Issue each of ``result.warnings`` through Python's `warnings` module as well, with
+        category `impactgen.errors.ValidityWarning` (the t_eval times left out:
+        `ImpactgenWarning`), attributed to the line that called simulate(), so that a result
+        outside the model's range is never silent. False keeps them in ``result.warnings``
+        only: for a caller that reports them itself (the command line prints them; a sweep
+        issues one warning with a count of its cases).
 
     Returns
     -------
@@ -135,8 +143,8 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         if settings:  # only the values given are checked: the rest of the scene was checked already
             solver = solver_with(scene, settings)
     times = _checked_times(t_eval, scene, solver) if t_eval is not None else None
-    if type(dense_output) is not bool or type(record_steps) is not bool:  # (the common case at once)
-        for name, flag in (("dense_output", dense_output), ("record_steps", record_steps)):
+    if type(dense_output) is not bool or type(record_steps) is not bool or type(warn) is not bool:  # (the common case)
+        for name, flag in (("dense_output", dense_output), ("record_steps", record_steps), ("warn", warn)):
             if flag is not True and flag is not False and not isinstance(flag, np.bool_):
                 raise SceneError(name, f"expected True or False, got {excerpt(flag)}")
     if engine == "c":
@@ -146,8 +154,13 @@ def simulate(scene: Scene, engine: str = "c", *, method: str | None = None, rtol
         from . import reference
         result = reference.simulate(replace_solver(scene, solver), _reference_method(method), t_eval=times,
                                     dense_output=bool(dense_output))
+    dropped = []  # t_eval's times after the run's end: not done as asked, but no validity issue
     if times is not None and len(result.t) < len(times):  # warnings are made once, then kept
-        result.warnings.extend(dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1])))
+        dropped = dropped_times_warning(len(times), len(result.t), float(result.trajectory.t[-1]))
+        result.warnings.extend(dropped)
+    if warn:
+        issue_warnings(result.warnings[:len(result.warnings) - len(dropped)], scene.name)
+        issue_warnings(dropped, scene.name, ImpactgenWarning)
     return result
 
 

@@ -2,7 +2,7 @@
 
 The impact figures are against time with the contact phases shaded: link angles, angular
 speeds, tip velocity, deformation and normal force, kinetic energy per link and in total,
-and a bar chart of the energy budget (Delta T against the works of the forces). The
+and a bar chart of the energy budget (delta_T against the works of the forces). The
 whole-run view (the default when a run has several impacts) puts the angles, the energies
 and the tip's height above the surface over the whole run, with every impact marked.
 """
@@ -123,15 +123,15 @@ def _plot_window(plt, result: SimulationResult, out_dir: Path, mask: np.ndarray,
         _save(plt, fig, out_dir / filename, paths)
 
     figure("angles.png", "link angles (Fig. 4)",
-           [(f"q{i + 1}", np.degrees(result.q[i])) for i in range(n)], "angle (deg)")
+           [(f"q{i + 1}", np.degrees(result.q[i])) for i in range(n)], "q, link angle (deg)")
     figure("angular_speeds.png", "angular speeds (Fig. 5)",
-           [(f"omega{i + 1}", result.u[i]) for i in range(n)], "rad/s")
+           [(f"u{i + 1}", result.u[i]) for i in range(n)], "u, angular speed (rad/s)")
     figure("tip_velocity.png", "tip velocity (Fig. 6)",
-           [("v_Bx", result.v_Bx), ("v_By", result.v_By)], "m/s")
+           [("v_Bx", result.v_Bx), ("v_By", result.v_By)], "v_B, tip velocity (m/s)")
     figure("deformation_force.png", "deformation and normal force (Fig. 7)",
            [("delta", result.delta * 1e6)], "delta (um)", twin=("F", result.F, "F (N)"))
     figure("kinetic_energy.png", "kinetic energy (Fig. 8)",
-           [(f"T{i + 1}", result.T_links[i]) for i in range(n)] + [("T", result.T)], "J")
+           [(f"T{i + 1}", result.T_links[i]) for i in range(n)] + [("T", result.T)], "T, kinetic energy (J)")
     idx = np.flatnonzero(mask)
     _energy_bars(plt, result, out_dir, _budget_between(result, idx[0], idx[-1]), which, paths)
     return paths
@@ -147,14 +147,14 @@ def _budget_between(result: SimulationResult, i0: int, i1: int) -> dict[str, flo
 
 def _energy_bars(plt, result: SimulationResult, out_dir: Path, e: dict[str, float], which: str,
                  paths: list[Path]) -> None:
-    labels = ["Delta T = T0 - Tf", "-W_normal (plastic)", "-W_friction", "-W_gravity", "residual"]
+    labels = ["delta_T = T0 - Tf", "-W_normal (plastic)", "-W_friction", "-W_gravity", "residual"]
     values = [e["delta_T"], -e["W_normal"], -e["W_friction"], -e["W_gravity"], e["residual"]]
     fig, ax = plt.subplots(figsize=(7, 4))
     bars = ax.bar(labels, values, color=["#4477aa", "#ee6677", "#228833", "#ccbb44", "#bbbbbb"])
     for bar, v in zip(bars, values):
         ax.annotate(f"{v:.3g} J", (bar.get_x() + bar.get_width() / 2, bar.get_height()),
                     ha="center", va="bottom", fontsize=8)
-    ax.set_ylabel("J")
+    ax.set_ylabel("energy (J)")
     ax.set_title(f"{result.scene.name}: energy budget of the {which}")
     ax.tick_params(axis="x", labelsize=8)
     _save(plt, fig, out_dir / "energy_budget.png", paths)
@@ -167,15 +167,15 @@ def _plot_whole_run(plt, result: SimulationResult, out_dir: Path) -> list[Path]:
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     for i in range(result.n):
         axes[0].plot(t, np.degrees(result.q[i]), lw=1.0, label=f"q{i + 1}")
-    axes[0].set_ylabel("angle (deg)")
+    axes[0].set_ylabel("q, link angle (deg)")
     works = result.W_normal + result.W_friction
     axes[1].plot(t, result.T, lw=1.0, label="T (kinetic)")
     axes[1].plot(t, result.V - result.V[0], lw=1.0, label="V - V(0) (gravity)")
     axes[1].plot(t, result.T + result.V - result.V[0] - works, lw=1.0, ls="--",
                  label="T + V - V(0) - works (constant if the budget closes)")
-    axes[1].set_ylabel("J")
-    axes[2].plot(t, -result.delta * 1e3, lw=1.0, color="k", label="tip height above the surface")
-    axes[2].set_ylabel("mm")
+    axes[1].set_ylabel("energy (J)")
+    axes[2].plot(t, -result.delta * 1e3, lw=1.0, color="k", label="-delta, tip height above the surface")
+    axes[2].set_ylabel("-delta (mm)")
     axes[2].set_xlabel("t (s)")
     starts = [i.t_start for i in result.impacts]
     points = sorted({i.point for i in result.impacts}, key=lambda p: (p == "tip", p))

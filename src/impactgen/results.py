@@ -111,7 +111,8 @@ class SimulationResult:
         Sample times in s: every integrator step and switch, or `t_eval` if it was given.
     y : ndarray, shape (n_states, n_points)
         The states at `t`: q1..qn (rad), u1..un (rad/s), W_normal (J)[, W_friction (J)], the
-        impulses P_normal (N s)[, P_friction (N s)].
+        impulses P_normal (N s)[, P_friction (N s)], then each joint's with contact code
+        (W_normal_Jk, ...); `state_names` names the rows (8 for the paper's scene).
     q, u : ndarray, shape (n, n_points)
         Link angles and angular speeds.
     delta, delta_rate, F, F_f, x_B, y_B, v_Bx, v_By, T, V : ndarray, shape (n_points,)

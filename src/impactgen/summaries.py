@@ -9,7 +9,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from .codegen.spec import point_number
-from .impacts import COEFFICIENTS, Impact, PhaseSpan, switch_list, tip_impacts
+from .impacts import COEFFICIENT_UNITS, COEFFICIENTS, IMPACT_UNITS, Impact, PhaseSpan, switch_list, tip_impacts
 from .records import Tallied
 
 if TYPE_CHECKING:  # (annotations only: results.py imports this module)
@@ -19,6 +19,21 @@ SUMMARY_LEADING = Tallied._fields[:9]  # T0 .. t_impact: the summary's first ent
 SUMMARY_LATER = ("impacts", "joint_impacts", "first_point", "t_sustained", "t_final")  # its entries after the final state
 ENERGY_TERMS = ("W_normal", "W_friction", "W_gravity", "residual")  # its energy budget, as energy_balance
 BUDGET = ("T0", "Tf", *ENERGY_TERMS)  # what energy_warning reads of a summary, in its order
+# The unit of each number of a summary, by its key ("1": a count or a ratio): the summary
+# dict's, and a sweep table's column of the same name (its energy.* and coefficients.* columns
+# by the name after the dot, u_final[i] by u_final). The impact's own values as IMPACT_UNITS.
+SUMMARY_UNITS = {"T0": "J", "Tf": "J", "delta_T": "J",
+                 **{name: IMPACT_UNITS[name] for name in ("delta_max", "delta_r", "P_max", "R_res")},
+                 "t_contact": "s", "t_impact": "s", "u_final": "rad/s", "q_final": "rad", "impacts": "1",
+                 "joint_impacts": "1", "first_point": "1", "t_sustained": "s", "t_final": "s",
+                 **{name: "J" for name in ENERGY_TERMS}, **COEFFICIENT_UNITS}
+
+
+def summary_unit(name: str) -> str | None:
+    """The unit of a summary's value or a sweep's column (`SUMMARY_UNITS`): "delta_r",
+    "energy.W_normal", "coefficients.e_N", "u_final[2]"; None for a name it does not know."""
+    key = name.rpartition(".")[2].split("[", 1)[0]
+    return SUMMARY_UNITS.get(key)
 
 
 def energy_budget(traj: Trajectory, i0: int, i1: int) -> tuple[float, float, dict[str, float]]:

@@ -30,6 +30,7 @@ import numpy as np
 
 from .codegen.spec import point_number
 from .codegen.thresholds import THRESHOLD
+from .errors import ImpactgenWarning, ValidityWarning, warn
 from .laws import YIELD_ONSET, ContactConstants, contact_constants, contact_radius
 from .scene import Scene
 
@@ -129,6 +130,14 @@ def validity_warnings(scene: Scene, impacts, contact: Mapping[str, YieldScale] |
                     (k, f"{_at(impact)}the elastic limit was never reached (delta_max = {w:.3g} delta_c): "
                         "a purely Hertzian impact, delta_r = 0"))
     return _grouped(found, len(impacts)) + chatter if found else chatter
+
+
+def issue_warnings(warnings: list[str], scene_name: str,
+                   category: type[ImpactgenWarning] = ValidityWarning) -> None:
+    """Issue a run's warnings (its `warnings`) through Python's warnings module, each naming
+    the scene, attributed to the user's line that asked for the run."""
+    for text in warnings:
+        warn(f"{scene_name}: {text}", category)
 
 
 def point_constants(scene: Scene, point: str) -> ContactConstants:

@@ -13,9 +13,8 @@ from pathlib import Path
 from .points import points_report_lines, points_targets
 from .sweep import sweep_report_lines, sweep_targets
 from .verdict import verdict
-from .workprecision import Run, Truth, time_at_error
+from .workprecision import Run, Truth, plot_workprecision, time_at_error
 
-ERRORS = (("err_u_final", "u_final"), ("err_delta_r", "delta_r"), ("err_delta_T", "Delta T"))
 TARGET_RTOL = 1e-8
 
 
@@ -49,32 +48,6 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-
-
-def _plot_workprecision(runs: list[Run], scene: str, out: Path) -> Path:
-    from ..plots import _pyplot
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
-    names = list(dict.fromkeys(r.contender for r in runs if r.scene == scene))
-    markers = "os^vD<>ph*"
-    for ax, (key, label) in zip(axes, ERRORS):
-        for i, name in enumerate(names):
-            pts = [(getattr(r, key), r.wall_s) for r in runs
-                   if r.scene == scene and r.contender == name and r.status == "ok" and getattr(r, key) > 0]
-            if pts:
-                e, t = zip(*pts)
-                ax.loglog(e, [x * 1e3 for x in t], marker=markers[i % len(markers)], ms=4, label=name)
-        ax.set_xlabel(f"relative error of {label}")
-        ax.set_ylabel("wall time (ms)")
-        ax.grid(alpha=0.3, which="both")
-        ax.invert_xaxis()
-    axes[0].legend(fontsize=7)
-    fig.suptitle(f"work-precision: {scene}")
-    fig.tight_layout()
-    path = out / f"workprecision_{scene}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
 
 
 def _plot_lines(rows: list[dict], x: str, series: dict[str, str], ylabel: str, title: str, path: Path) -> Path:
@@ -245,7 +218,7 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
         "speedups_at_rtol_1e-8": summary, "targets": goals, "rhs": rhs_rows, "scaling": scaling_rows,
         "sweep": sweep_result, "c_loop": c_loop or {}, "in_turn": in_turn or {}, "points": points_result,
     }, indent=1, default=lambda v: None))
-    figures = [_plot_workprecision(runs, s, out) for s in scenes]
+    figures = [plot_workprecision(runs, s, out) for s in scenes]
     if rhs_rows:
         figures.append(_plot_lines(rhs_rows, "links", {"c_elastoplastic_ns": "generated C, called from C",
                                                         "cffi_ns": "generated C through cffi",
@@ -265,14 +238,14 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
         lines += ["", "## Targets", "", "| target | measured | |", "|---|---|---|"]
         lines += [f"| {g['target']} | {g['measured']} | {g['verdict']} |" for g in goals]
     lines += ["", "## Method", "",
-              "Error: relative error of u_final (max norm), delta_r and Delta T against a reference",
+              "Error: relative error of u_final (max norm), delta_r and delta_T against a reference",
               "solution from CVODE BDF at rtol 1e-13, atol 1e-15, whose agreement with the independent",
               "reference engine (Radau, rtol 1e-12) is shown below. Time: median wall time of repeated",
               "runs in a warm process (models compiled, imports done): at least 5 runs (3 with --quick),",
               "and a fast contender repeats until its runs add up to 0.25 s. Python-driven contenders have a",
               "budget of right-hand-side calls; a contender stops tightening after a failure, a budget",
               "overrun or a run slower than the limit.", ""]
-    lines += ["| scene | u_final | delta_r | Delta T | (reference engine vs CVODE at 1e-13) |", "|---|---|---|---|---|"]
+    lines += ["| scene | u_final | delta_r | delta_T | (reference engine vs CVODE at 1e-13) |", "|---|---|---|---|---|"]
     lines += [f"| {t.scene} | {t.check['u_final']:.1e} | {t.check['delta_r']:.1e} | {t.check['delta_T']:.1e} | |" for t in truths]
     lines += [""] + [f"- {n}" for n in notes]
     for scene in scenes:
@@ -285,7 +258,7 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
                       "| contender | time for that error (ms) | x CVODE BDF | |", "|---|---|---|---|"]
             lines += [f"| {r['contender']} | {r['time_ms']:.2f} | {r['slower_than_cvode_bdf']:.1f} | {r['how']} |"
                       for r in s[1:]]
-        lines += ["", "| contender | rtol | u_final error | delta_r error | Delta T error | ms | steps | RHS calls | status |",
+        lines += ["", "| contender | rtol | u_final error | delta_r error | delta_T error | ms | steps | RHS calls | status |",
                   "|---|---|---|---|---|---|---|---|---|"]
         for r in runs:
             if r.scene == scene:

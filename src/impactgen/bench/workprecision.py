@@ -15,6 +15,7 @@ import statistics
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -24,6 +25,15 @@ from .contenders import BudgetExceeded, Contender, available_contenders, with_to
 TRUTH_RTOL = 1e-13
 MAX_REPEATS = 500
 CHECK_RTOL = 1e-12
+# The errors a work-precision figure plots, one panel each: the Run field and the quantity's name.
+ERRORS = (("err_u_final", "u_final"), ("err_delta_r", "delta_r"), ("err_delta_T", "delta_T"))
+# Each line of a figure has a colour and a marker of its own (the 20 colours of matplotlib's
+# "tab20", the markers below), and its family a line style: impactgen's lines are solid,
+# scipy's dashed, so that no two lines look alike.
+MARKERS = ("o", "s", "^", "v", "D", "<", ">", "p", "h", "*", "X", "P", "d", "H", "8", "1", "2", "3", "4", "+", "x")
+LEGEND_COLUMNS = 4  # the legend goes below the three panels, in this many columns
+LEGEND_ROW = 0.045  # of the figure's height per legend row
+FAMILY_LINES = {"impactgen": "-", "scipy + C": "--", "reference": ":", "scikit-sundae": "-.", "PyDy": "-."}
 
 
 @dataclass(frozen=True)
@@ -82,10 +92,10 @@ def compute_truth(name: str, scene: Scene) -> Truth:
     from ..engines import simulate
     started = time.perf_counter()
     accurate = scene.replace(solver=dataclasses.replace(scene.solver, rtol=TRUTH_RTOL, atol=1e-15))
-    c = simulate(accurate, engine="c").summary
+    c = simulate(accurate, engine="c", warn=False).summary
     t_c = time.perf_counter() - started
     started = time.perf_counter()
-    r = simulate(with_tolerance(scene, CHECK_RTOL), engine="reference").summary
+    r = simulate(with_tolerance(scene, CHECK_RTOL), engine="reference", warn=False).summary
     t_r = time.perf_counter() - started
     e = errors(r, c)
     return Truth(name, c, {"u_final": e[0], "delta_r": e[1], "delta_T": e[2]},
@@ -193,3 +203,50 @@ def time_at_error(runs: list[Run], error: float, key: str = "err_u_final") -> tu
     if pair:
         return pair[0].wall_s, "its loosest run is already this accurate"
     return math.nan, "not reached"
+
+
+def line_styles(runs: list[Run]) -> dict[str, dict[str, str]]:
+    """Each contender's line style (colour, marker, line style by its family), the same in
+    every figure of a benchmark and different for every contender (colours from "tab20",
+    and evenly spaced hues beyond 20 contenders)."""
+    from matplotlib import colormaps
+    families = dict((r.contender, r.family) for r in runs)
+    count = len(families)
+    palette = colormaps["tab20"] if count <= 20 else colormaps["hsv"]
+    styles = {}
+    for i, (name, family) in enumerate(families.items()):
+        # tab20 in pairs of a strong and a light shade: the strong ones first
+        colour = palette((2 * i) % 20 + (2 * i) // 20) if count <= 20 else palette(i / count)
+        styles[name] = {"color": colour, "marker": MARKERS[i % len(MARKERS)],
+                        "linestyle": FAMILY_LINES.get(family, "-")}
+    return styles
+
+
+def plot_workprecision(runs: list[Run], scene: str, out: Path) -> Path:
+    """The work-precision figure of `scene`: wall time against the relative error of each of
+    ERRORS, one line per contender (`line_styles`), written as out/workprecision_<scene>.png."""
+    from ..plots import _pyplot
+    plt = _pyplot()
+    styles = line_styles(runs)
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
+    names = list(dict.fromkeys(r.contender for r in runs if r.scene == scene))
+    for ax, (key, label) in zip(axes, ERRORS):
+        for name in names:
+            pts = [(getattr(r, key), r.wall_s) for r in runs
+                   if r.scene == scene and r.contender == name and r.status == "ok" and getattr(r, key) > 0]
+            if pts:
+                e, t = zip(*pts)
+                ax.loglog(e, [x * 1e3 for x in t], ms=5, lw=1.2, label=name, **styles[name])
+        ax.set_xlabel(f"relative error of {label} (1)")
+        ax.set_ylabel("wall time (ms)")
+        ax.grid(alpha=0.3, which="both")
+        ax.invert_xaxis()
+    handles, labels = axes[0].get_legend_handles_labels()
+    rows = -(-len(labels) // LEGEND_COLUMNS)
+    fig.legend(handles, labels, loc="lower center", ncol=LEGEND_COLUMNS, fontsize=8)  # below: no line hidden
+    fig.suptitle(f"work-precision: {scene}")
+    fig.tight_layout(rect=(0, LEGEND_ROW * rows, 1, 1))
+    path = out / f"workprecision_{scene}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -26,9 +26,11 @@ from __future__ import annotations
 import json
 import os
 import sys
-from typing import Sequence
+import warnings
+from contextlib import contextmanager
+from typing import Iterator, Sequence
 
-from ..errors import ImpactgenError, SceneError
+from ..errors import ImpactgenError, ImpactgenWarning, SceneError
 from .report import format_summary, one_line
 
 __all__ = ["main", "format_summary"]
@@ -45,7 +47,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         if args.command is not None:
-            return COMMANDS[args.command](args)
+            with _warnings_as_lines():
+                return COMMANDS[args.command](args)
         if args.links is not None:
             return links(args)
         raise SceneError(None, "nothing to do: give a command (run, examples, generate, plot, ...) or "
@@ -66,3 +69,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     except SystemExit as exc:  # --help, --version
         return exc.code if isinstance(exc.code, int) else 0
+
+
+@contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """impactgen's warnings (a run's validity warnings, say) shown as the command's other
+    messages are, one line on stderr, instead of Python's file:line form; other warnings as
+    Python shows them."""
+    with warnings.catch_warnings():
+        python_shows = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, ImpactgenWarning):
+                print(f"impactgen: warning: {one_line(str(message))}", file=sys.stderr)
+            else:
+                python_shows(message, category, filename, lineno, file, line)
+        warnings.showwarning = show
+        yield

@@ -49,7 +49,7 @@ def _run(args: argparse.Namespace) -> int:
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
     if args.format and args.out is None:
         raise SceneError("--format", "goes with --out DIR (the folder to write the tables into)")
-    result = impactgen.simulate(scene, engine=args.engine, method=args.method)
+    result = impactgen.simulate(scene, engine=args.engine, method=args.method, warn=False)  # printed below
     written = []
     if args.out is not None:
         from ..export import write_run

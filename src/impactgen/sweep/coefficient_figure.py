@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..impacts import COEFFICIENT_UNITS
+
 COEFFICIENT_COLUMNS = {"coefficients.e_N": "e_N (kinematic, Newton)", "coefficients.e_P": "e_P (kinetic, Poisson)",
                        "coefficients.e_E": "e_E (energetic, Stronge)"}
 SPEED_COLUMN = "coefficients.v_n0"
@@ -29,8 +31,8 @@ def coefficient_figure(plt, ok, folder: Path) -> list[Path]:
         ax.plot(speed[have][order], values, "o-", ms=3, lw=1, label=label)
     if speed[have].max() > LOG_SPAN * speed[have].min():
         ax.set_xscale("log")
-    ax.set_xlabel("normal impact speed |v_n0| (m/s)")
-    ax.set_ylabel("coefficient of restitution")
+    ax.set_xlabel(f"|v_n0|, normal impact speed ({COEFFICIENT_UNITS['v_n0']})")
+    ax.set_ylabel(f"e_N, e_P, e_E ({COEFFICIENT_UNITS['e_N']})")
     ax.set_title("coefficients of restitution against impact speed")
     ax.grid(alpha=0.3, which="both")
     ax.legend()
