@@ -103,3 +103,24 @@ def test_after_many_impacts_the_first_impacts_outputs_are_still_the_first(fmus):
     assert last["run.impacts"] == whole.summary["impacts"]
     assert last["run.delta_max"] == pytest.approx(whole.summary["delta_max"], rel=RTOL)
     assert last["run.t_contact"] == pytest.approx(whole.summary["t_contact"], rel=1e-5)
+
+
+def test_without_the_c_engine_the_stop_time_comes_from_the_reference_engine(monkeypatch):
+    """A Model Exchange FMU needs no SUNDIALS: where the C engine cannot be built, the scene's
+    separation is found by the reference engine, to the same default stop time."""
+    from impactgen.errors import BuildError
+    from impactgen.fmu import package
+
+    scene = impactgen.load_scene("paper")
+    expected = package.default_stop_time(scene)
+    engines = []
+
+    def simulate(scene, engine="c", **kw):
+        engines.append(engine)
+        if engine == "c":
+            raise BuildError("no SUNDIALS here")
+        return impactgen.simulate(scene, engine=engine, **kw)
+
+    monkeypatch.setattr(package, "simulate", simulate)
+    assert package.default_stop_time(scene) == expected
+    assert engines == ["c", "reference"]
