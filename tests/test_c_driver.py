@@ -31,3 +31,19 @@ def test_c_driver_matches_impactgen_run(scene_name, tmp_path, c_driver):
     for i, u in enumerate(s["u_final"], start=1):
         assert float(printed[f"u_final[{i}]"]) == pytest.approx(u, rel=1e-8)
     assert float(printed["W_normal"]) == pytest.approx(s["energy"]["W_normal"], rel=1e-8)
+
+
+@pytest.mark.slow  # generates and compiles a 4-link model
+def test_c_driver_builds_a_model_generated_with_a_prefix(tmp_path, c_driver):
+    """`impactgen --links 4 --prefix chain4 --out D`, then examples/c's make with MODEL=D: the
+    Makefile finds the prefix by the folder's chain4_scene.h and gives the runtime its names."""
+    folder = tmp_path / "chain4"
+    subprocess.run([sys.executable, "-m", "impactgen.cli", "--links", "4", "--prefix", "chain4", "--out", str(folder)],
+                   check=True, capture_output=True, text=True)
+    assert (folder / "chain4.c").exists() and not (folder / "model.c").exists()
+    out = subprocess.run([str(c_driver(folder))], capture_output=True, text=True, check=True).stdout
+    printed = dict(line.split(" ", 1) for line in out.splitlines())
+    s = impactgen.simulate(impactgen.load_scene(folder / "scene.toml")).first_impact
+    assert printed["scene"] == "steel-chain-4" and printed["status"] == "ok"
+    for name in FIELDS:
+        assert float(printed[name]) == pytest.approx(s[name], rel=1e-8), name

@@ -64,6 +64,20 @@ static void values_follow_the_state(fmi2Component c, double *x, size_t nx, doubl
     CHECK(fmi2SetTime(c, t) == fmi2OK);
 }
 
+/* Every variable reads, the summaries' included (each read at its offset in ig_summary). */
+static void every_variable_reads(fmi2Component c)
+{
+    for (int k = 0; k < FMU_NVARS; ++k) {
+        const fmi2ValueReference vr = (fmi2ValueReference)k;
+        double r;
+        fmi2Integer i;
+        fmi2Boolean b;
+        if (fmu_variables[k].type == 'R') CHECK(fmi2GetReal(c, &vr, 1, &r) == fmi2OK);
+        else if (fmu_variables[k].type == 'I') CHECK(fmi2GetInteger(c, &vr, 1, &i) == fmi2OK);
+        else CHECK(fmi2GetBoolean(c, &vr, 1, &b) == fmi2OK);
+    }
+}
+
 static void model_exchange(void)
 {
     fmi2Component c = fmi2Instantiate("me", fmi2ModelExchange, FMU_GUID, "", &callbacks, fmi2False, fmi2True);
@@ -102,6 +116,12 @@ static void model_exchange(void)
     fmi2Integer impacts = 0;
     const fmi2ValueReference vr_impacts = (fmi2ValueReference)vr_of("impacts");
     CHECK(fmi2GetInteger(c, &vr_impacts, 1, &impacts) == fmi2OK && impacts == 1);
+    every_variable_reads(c);
+    /* one impact: the first is the latest, and the run's tally saw it */
+    CHECK(real(c, "first_impact.delta_max") == real(c, "delta_max"));
+    CHECK(real(c, "first_impact.delta_r") == real(c, "delta_r") && real(c, "run.delta_r") == real(c, "delta_r"));
+    const fmi2ValueReference vr_run_impacts = (fmi2ValueReference)vr_of("run.impacts");
+    CHECK(fmi2GetInteger(c, &vr_run_impacts, 1, &impacts) == fmi2OK && impacts == 1);
     CHECK(fmi2Terminate(c) == fmi2OK);
     fmi2FreeInstance(c);
 }
@@ -125,6 +145,8 @@ static void co_simulation(void)
     CHECK(a && b);
     if (!a || !b) return;
     const double u = co_simulate(a, 1e-3, 1e-4);
+    every_variable_reads(a);
+    CHECK(real(a, "first_impact.delta_max") == real(a, "delta_max") && real(a, "first_impact.t_contact") > 0.0);
     CHECK(fmi2Reset(a) == fmi2OK);
     CHECK(co_simulate(a, 1e-3, 2.5e-4) == u);  /* reset, and a coarser step: the same answer */
     CHECK(co_simulate(b, 1e-3, 1e-4) == u);

@@ -11,6 +11,7 @@ import datetime
 import hashlib
 import importlib.resources
 import json
+import math
 import os
 import platform
 import re
@@ -26,7 +27,7 @@ from ..build import COMPILE_ARGS, GLUE_FILES, _native
 from ..codegen.emit import _c_double, _templates, _tidy, driver_files, generate_model
 from ..codegen.expressions import assemble_model
 from ..codegen.spec import ModelSpec
-from ..engines import model_spec
+from ..engines import model_spec, simulate
 from ..errors import BuildError, SceneError, excerpt
 from ..scene import Scene
 from ..sundials import find_sundials
@@ -37,7 +38,8 @@ FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h") 
 FMU_FILES = ("fmu_instance.h", "fmu_api.c", "fmu_start.c", "fmu_variables.c", "fmu_events.c",
              "fmu_model_exchange.c", "fmu_cosimulation.c")
 KINDS_OF_FMU = ("me", "cs", "both")
-DEFAULT_STOP_TIME = 0.5  # s, the default experiment of a scene that stops at separation
+SUMMARY_FILES = ("tally.h", "tally.c")  # the run's summaries, which both kinds tally (Co-Simulation: with GLUE_FILES)
+STOP_MARGIN = 0.1  # a separation scene's default stop: this share of its first impact's duration after it
 EXPORTS = "{ global: fmi2*; local: *; };\n"  # linker version script: only the FMI functions
 
 
@@ -100,9 +102,8 @@ def fmu_sources(scene: Scene, kind: str = "both") -> FmuSources:
     sources[f"{gen.prefix}_fmu.h"] = _tidy(env.get_template("fmu.h.j2").render(context))
     for name in FMI_HEADERS + FMU_FILES:
         sources[name] = (importlib.resources.files("impactgen") / "native" / "fmi2" / name).read_text(encoding="utf-8")
-    if cs:
-        for name in GLUE_FILES:
-            sources[name] = _native(name)
+    for name in GLUE_FILES if cs else SUMMARY_FILES:
+        sources[name] = _native(name)
     c_files = [name for name in sources if name.endswith(".c")]
     defines = (["FMU_MODEL_EXCHANGE"] if me else []) + (["FMU_CO_SIMULATION"] if cs else [])
     units = sorted({v.unit for v in variables_ if v.unit})
@@ -114,10 +115,32 @@ def fmu_sources(scene: Scene, kind: str = "both") -> FmuSources:
         generated_at=datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         n_events=len(gen.event_names),  # the tip's, then each joint's
         sources=c_files, units=[(u, UNITS[u]) for u in units],
-        stop_time=_c_double(scene.solver.t_end if scene.solver.t_end is not None else DEFAULT_STOP_TIME),
-        tolerance=_c_double(scene.solver.rtol), variables=variables_, nominals={})
+        stop_time=_c_double(default_stop_time(scene)), tolerance=_c_double(scene.solver.rtol),
+        variables=variables_, nominals={})
     return FmuSources(identifier, sources, tuple(defines), description,
                       _build_description(identifier, c_files, defines, cs))
+
+
+def default_stop_time(scene: Scene) -> float:
+    """The stop time of the FMU's DefaultExperiment: the scene's `solver.t_end`. An FMU always
+    runs to a time, so for a scene that stops at its first separation it is just past that
+    separation (by STOP_MARGIN of the impact's duration, rounded up to one significant digit of
+    the margin), found by running the scene: the C engine, or the reference engine where the C
+    engine cannot be built (a Model Exchange FMU needs no SUNDIALS). A scene whose run ends
+    without a finished impact (none within `solver.t_max`, or a failure) gives `solver.t_max`."""
+    if scene.solver.t_end is not None:
+        return scene.solver.t_end
+    try:
+        result = simulate(scene)
+    except BuildError:
+        result = simulate(scene, engine="reference")
+    first = result.first_impact
+    if result.status != "ok" or not first["impacts"] or not first["t_contact"]:
+        return scene.solver.t_max
+    margin = STOP_MARGIN * first["t_contact"]
+    digit = math.floor(math.log10(margin))
+    steps = math.ceil((first["t_impact"] + first["t_contact"] + margin) / 10.0 ** digit)
+    return float(f"{steps}e{digit}")
 
 
 def build_fmu(scene: Scene, out: Path, kind: str = "both") -> Path:

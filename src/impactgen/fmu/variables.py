@@ -9,17 +9,24 @@ penetration, forces and speeds and the energies, and the machine's discrete outp
 with contact at joints (ModelSpec.joints) has the same per point, in FMI 2.0's structured
 naming: `contact[2].delta`, `contact[2].F`, ... and `contact[2].phase`, `contact[2].impacts`,
 `contact[2].delta_max`, ... for joint 2 (the end of link 2); the tip's keep their names.
+Last come the run's two summaries, as `impactgen run` and the sweep name their fields:
+`first_impact.delta_r`, `first_impact.coefficients.e_N`, `run.impacts`, `run.u_final[2]`, ...
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import get_type_hints
 
 from ..codegen.emit import POINT_OUTPUTS
 from ..codegen.expressions import ModelExpressions
 from ..codegen.parameters import Field
+from ..impacts import COEFFICIENTS
+from ..records import Tallied
+from ..summaries import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 
 # kinds the C glue reads and writes (native/fmi2: enum var_kind in model_fmu.h)
-KINDS = ("param", "q0", "u0", "state", "der", "output", "phase", "impacts", "delta_max", "delta_r", "P_max")
+KINDS = ("param", "q0", "u0", "state", "der", "output", "phase", "impacts", "delta_max", "delta_r", "P_max",
+         "run", "first_impact")
 
 
 @dataclass(frozen=True)
@@ -37,6 +44,15 @@ class Variable:
     index: int  # struct field, state, output or link index, by kind; a discrete output's point
     # (0 the tip, k + 1 the joint in slot k of the machine's joints)
     derivative_of: int | None = None  # vr of the state, for a derivative
+    member: str | None = None  # a summary's field of ig_summary (tally.h); index: the entry of an array field
+
+    @property
+    def c_index(self) -> str:
+        """The index in the C table: a summary field's byte offset in ig_summary, else `index`."""
+        if self.member is None:
+            return str(self.index)
+        offset = f"offsetof(ig_summary, {self.member})"
+        return f"(int){offset}" if self.index == 0 else f"(int)({offset} + {self.index} * sizeof(double))"
 
 
 DISCRETE = (("delta_max", "m", "maximum compression of {of} last impact"),
@@ -119,7 +135,55 @@ def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()
         add(name=f"initial.u[{i + 1}]", type="Real", causality="parameter", variability="fixed",
             initial="exact", start=float(scene.u0[i]), unit="rad/s", description=f"u{i + 1} at the start",
             kind="u0", index=i)
+    for kind, of in SUMMARIES:  # last, so that the value references above stay as they were
+        for name, member, index, unit, doc in summary_fields(n):
+            integer = TYPES[member] is int
+            add(name=f"{kind}.{name}", type="Integer" if integer else "Real", causality="output",
+                variability="discrete" if integer else "continuous", initial="calculated", start=None, unit=unit,
+                description=f"{of}: {doc}", kind=kind, index=index, member=member)
     return out
+
+
+TYPES = get_type_hints(Tallied)  # int or float, per ig_summary member
+# the two summaries of the run from its start to the current time, as impactgen run's (tally.c)
+SUMMARIES = (("first_impact", "the first impact's summary (final once it ended; the run's while it had none)"),
+             ("run", "the run's summary from its start to now"))
+SUMMARY_DOCS = {  # unit, what (summaries.py, MODEL section 6)
+    "T0": ("J", "kinetic energy at its start"), "Tf": ("J", "kinetic energy at its end"),
+    "delta_T": ("J", "kinetic energy lost, T0 - Tf"), "delta_max": ("m", "largest maximum compression"),
+    "delta_r": ("m", "permanent deformation of the deepest dent (Eq. 12)"),
+    "P_max": ("N", "largest normal force at maximum compression"), "R_res": ("m", "the deepest dent's radius"),
+    "t_contact": ("s", "contact time of the ended impacts"), "t_impact": ("s", "start of the first impact (NaN: none)"),
+    "n_switches": ("", "phase switches within the first impact"),
+    "n_stick_slip": ("", "stick-slip changes within the first impact"),
+    "impacts": ("", "impacts of the tip"), "joint_impacts": ("", "impacts at the joints"),
+    "first_point": ("", "point of the first impact: n the tip, k joint k, 0 none"),
+    "t_sustained": ("s", "start of sustained contact (NaN: none)"), "t_final": ("s", "time at its end"),
+    "W_normal": ("J", "work of the normal forces"), "W_friction": ("J", "work of the friction forces"),
+    "W_gravity": ("J", "work of gravity"), "residual": ("J", "energy balance residual, delta T - sum of works"),
+    "v_n0": ("m/s", "first impact: normal speed at its start"),
+    "P_c": ("N.s", "first impact: normal impulse of compression"),
+    "P_r": ("N.s", "first impact: normal impulse of restitution"), "P_t": ("N.s", "first impact: tangential impulse"),
+    "e_N": ("", "first impact: kinematic coefficient of restitution (Newton)"),
+    "e_P": ("", "first impact: kinetic coefficient of restitution (Poisson)"),
+    "e_E": ("", "first impact: energetic coefficient of restitution (Stronge)"),
+    "friction_share": ("", "first impact: friction's share of the contact forces' work"),
+}
+
+
+def summary_fields(n: int) -> list[tuple[str, str, int, str, str]]:
+    """A summary's fields as `impactgen run --json` and the sweep's columns name them (name,
+    ig_summary member, entry of an array member, unit, what), in the sweep's order."""
+    def field(name: str, member: str | None = None) -> tuple[str, str, int, str, str]:
+        unit, doc = SUMMARY_DOCS[member or name]
+        return name, member or name, 0, unit, doc
+
+    final = [(f"{which}_final[{i + 1}]", "y_final", i + offset, unit, f"{what} of link {i + 1} at its end")
+             for which, offset, unit, what in (("u", n, "rad/s", "angular speed"), ("q", 0, "rad", "angle"))
+             for i in range(n)]
+    return [*(field(name) for name in (*SUMMARY_LEADING, "n_switches", "n_stick_slip")), *final,
+            *(field(name) for name in SUMMARY_LATER), *(field(f"energy.{name}", name) for name in ENERGY_TERMS),
+            *(field(f"coefficients.{name}", name) for name in COEFFICIENTS)]
 
 
 def _unit(f: Field) -> str:
@@ -130,4 +194,4 @@ def _unit(f: Field) -> str:
 UNITS = {"rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
          "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3}, "m": {"m": 1},
          "m/s": {"m": 1, "s": -1}, "m/s2": {"m": 1, "s": -2}, "N": {"kg": 1, "m": 1, "s": -2},
-         "kg": {"kg": 1}, "Pa": {"kg": 1, "m": -1, "s": -2}, "N.s": {"kg": 1, "m": 1, "s": -1}}
+         "kg": {"kg": 1}, "Pa": {"kg": 1, "m": -1, "s": -2}, "N.s": {"kg": 1, "m": 1, "s": -1}, "s": {"s": 1}}

@@ -60,23 +60,10 @@ static int record_switch(const model_machine *m, const model_params *params, dou
                          const double *t_buf, const double *y_buf, const double *out_buf)
 {
     for (int k = 0; k < MODEL_NCONTACT; ++k) {
-        const model_point_machine *r = &m->point[k];
-        if (!r->act) continue;
+        if (!m->point[k].act) continue;
         if (*n_segments >= segment_capacity) return 1;
         ig_segment *rec = &segments[(*n_segments)++];
-        rec->t = t;
-        rec->sample = sample;
-        rec->point = model_point_number(k);  /* its number in the chain */
-        rec->event = event;
-        rec->act = r->act;
-        rec->state = r->was;
-        rec->slip = r->was_slip;
-        rec->next_state = r->state;
-        rec->next_slip = r->slip;
-        rec->delta_max = r->delta_max;
-        rec->P_max = r->P_max;
-        rec->delta_r = r->delta_r;
-        rec->R_res = r->R_res;
+        ig_record_point(rec, m, k, t, sample, event);
         rec->params = *params;
         if (tally) ig_tally_segment(tally, rec, t_buf, y_buf, out_buf);
     }
@@ -182,12 +169,7 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
     t_buf[0] = t0;
     const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
     model_outputs(t0, y_buf, out_buf, p);
-    ig_tally_begin(tally, t0, y_buf, out_buf, start == MODEL_START_CONTACT);
-    for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the joints in contact from the start (the tip: above) */
-        if (model_point_number(k) == MODEL_NQ || m->point[k].state == MODEL_MACHINE_FREE) continue;
-        tally->joint_impacts++;
-        if (tally->first_point == 0) tally->first_point = model_point_number(k);
-    }
+    ig_tally_start(tally, m, start, t0, y_buf, out_buf);
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
     model_machine_atol(m, p, rtol, atol, atol_now);
     const int flag = ig_solver_reset(s, rtol, atol_now, max_steps);

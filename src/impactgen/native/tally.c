@@ -79,6 +79,35 @@ void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *
     }
 }
 
+void ig_tally_start(ig_tally *tally, const model_machine *m, int start, double t0, const double *y0,
+                    const double *out0)
+{
+    ig_tally_begin(tally, t0, y0, out0, start == MODEL_START_CONTACT);
+    for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the joints in contact from the start (the tip: above) */
+        if (model_point_number(k) == MODEL_NQ || m->point[k].state == MODEL_MACHINE_FREE) continue;
+        tally->joint_impacts++;
+        if (tally->first_point == 0) tally->first_point = model_point_number(k);
+    }
+}
+
+void ig_record_point(ig_segment *rec, const model_machine *m, int k, double t, long sample, int event)
+{
+    const model_point_machine *r = &m->point[k];
+    rec->t = t;
+    rec->sample = sample;
+    rec->point = model_point_number(k);  /* its number in the chain */
+    rec->event = event;
+    rec->act = r->act;
+    rec->state = r->was;
+    rec->slip = r->was_slip;
+    rec->next_state = r->state;
+    rec->next_slip = r->slip;
+    rec->delta_max = r->delta_max;
+    rec->P_max = r->P_max;
+    rec->delta_r = r->delta_r;
+    rec->R_res = r->R_res;
+}
+
 /* Add the latest impact's record (a->now_...) to the run's: the largest delta_max and P_max,
  * the deepest dent (the first of equals), its contact time. */
 static void fold_impact(ig_tally *a, double contact, int first_folded)

@@ -99,6 +99,16 @@ void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impa
 /* The values a summary reads at one sample (t, y with its outputs out). */
 void ig_read_point(ig_point *point, double t, const double *y, const double *out);
 
+/* Begin the tally of a run whose machine model_machine_start began at (t0, y0, with its
+ * outputs out0) and answered `start`: ig_tally_begin, and the joints in contact from the
+ * start counted as impacts (ig_run_begin's, and the FMU's). */
+void ig_tally_start(ig_tally *tally, const model_machine *m, int start, double t0, const double *y0,
+                    const double *out0);
+
+/* The switch record of contact point k (m->point[k], whose switch acted) at a switch at t
+ * (sample `sample`) that `event` began; its `params` are left for the caller. */
+void ig_record_point(ig_segment *rec, const model_machine *m, int k, double t, long sample, int event);
+
 /* Follow one switch record (at sample seg->sample of the buffers) in the tally. */
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
                       const double *out_buf);

@@ -3,7 +3,8 @@
  * (run.c, SUNDIALS linked statically), the same loop as impactgen's engine, at the tolerance
  * of fmi2SetupExperiment. The integrator steps on its own across communication points (the
  * states there are interpolated), so the step size a master chooses does not change the
- * events; each switch ig_run records is logged (fmu_log_switch).
+ * events; each switch ig_run records is logged (fmu_log_switch) and followed in the tally of
+ * the run's summaries.
  */
 #include <math.h>
 #include <string.h>
@@ -81,7 +82,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
         int n = 0, n_segments = 0;
         flag = ig_run(c->solver, &c->m, &c->p, &c->t_int, c->y_int, t_stop, target, MODEL_SCENE_ATOL,
                       MAX_SEGMENTS - begun, 0, t_buf, y_buf, out_buf, NULL, RUN_CAPACITY, &n, segments,
-                      RUN_SEGMENTS, &n_segments, NULL);
+                      RUN_SEGMENTS, &n_segments, &c->tally);
         begun += n_segments;
         log_switches(c, segments, n_segments);
         if (flag != IG_BUFFER_FULL && flag != IG_SEGMENTS_FULL) break;

@@ -22,6 +22,7 @@
 
 #include "fmi2Functions.h"
 #include "model_machine.h"
+#include "tally.h"
 #ifdef FMU_CO_SIMULATION
 #include "solver.h"
 #endif
@@ -46,10 +47,11 @@ enum fmu_call {
 
 /* What is computed from (t, y, p) once per change of any of them (fmu_variables.c). */
 typedef struct {
-    int have_outputs, have_derivatives;
+    int have_outputs, have_derivatives, have_summaries;
     int rhs_flag;                   /* model_rhs's return at (t, y) */
     double out[MODEL_NOUT];
     double ydot[MODEL_NSTATE];
+    ig_summary run, first_impact;   /* the summaries of the run from its start to t (fmu_summaries) */
 } fmu_values;
 
 typedef struct {
@@ -64,6 +66,8 @@ typedef struct {
     double t_done;               /* Model Exchange: the last completed step or event; time never goes before it */
     double y[MODEL_NSTATE];
     model_machine m;
+    ig_tally tally;              /* the run's summaries (tally.c, as impactgen run's): begun at the start,
+                                    followed switch by switch, read to t by fmu_summaries */
     double start_time, stop_time, rtol;
     int start_ready;             /* before initialization ends: y, p and m are those of the start values */
     int nominals_changed;
@@ -107,11 +111,14 @@ fmi2Status fmu_check_start(fmu_instance *c);
 void fmu_invalidate(fmu_instance *c);
 /* The derivatives at (t, y), computed once per change; *flag: model_rhs's return. */
 const double *fmu_derivatives(fmu_instance *c, int *flag);
+/* The outputs at (t, y), computed once per change. */
+const double *fmu_outputs(fmu_instance *c);
 
 /* ---- fmu_events.c ---- */
 /* The event update: when a watched event crossed in its direction since the sides were
- * stored (roots.h, through the machine), the machine switches, each switch is logged, and
- * the sides are stored again. Returns the machine's MODEL_ACT_* bits (0: a no-op event). */
+ * stored (roots.h, through the machine), the machine switches, each switch is logged and
+ * followed in the tally, and the sides are stored again. Returns the machine's MODEL_ACT_*
+ * bits (0: a no-op event). */
 int fmu_event_update(fmu_instance *c);
 /* Log a point's switch at t ("t = ...: from -> to", "t = ...: joint k: from -> to" for a
  * joint, and its stick-slip change under exact Coulomb friction). point: the chain's point

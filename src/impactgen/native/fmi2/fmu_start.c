@@ -2,7 +2,7 @@
  * fmu_start.c: the start of a run. The scene's start values (model_scene.h) as set by the
  * importer become the start state, the derived parameters (model_derive, which checks every
  * input against its physical range) and the machine at the start (model_machine_start), once
- * per change of the start values. A start the model cannot hold is refused by the model's own
+ * per change of the start values, where the tally of the run's summaries begins. A start the model cannot hold is refused by the model's own
  * checks, as load_scene refuses it: a point of the chain inside the surface
  * (model_machine_start_inside) or a joint the model was pruned of that could reach the surface
  * (model_pruned_reach: the FMU has no contact law for it). Each refusal names the scene key
@@ -50,7 +50,8 @@ int fmu_prepare(fmu_instance *c, const char **range)
     fmu_invalidate(c);
     const int bad = model_derive(&c->p, range);
     if (bad != MODEL_PARAMS_OK) return bad;
-    model_machine_start(&c->m, &c->p, c->t, c->y, 1);
+    const int start = model_machine_start(&c->m, &c->p, c->t, c->y, 1);
+    ig_tally_start(&c->tally, &c->m, start, c->t, c->y, fmu_outputs(c));
     double ev[MODEL_NEVENT];
     model_events(c->t, c->y, ev, &c->p);
     model_machine_sides(&c->m, ev);

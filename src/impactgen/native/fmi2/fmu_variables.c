@@ -4,7 +4,7 @@
  * checked against its physical range (model_check); the continuous outputs and the
  * derivatives are computed once per change of t, the state or a parameter (fmu_invalidate)
  * however many variables an importer asks for; the machine's discrete outputs are read from
- * it.
+ * it, and the summaries of the run so far (run.*, first_impact.*) from its tally.
  */
 #include <math.h>
 #include <stdio.h>
@@ -17,6 +17,7 @@ void fmu_invalidate(fmu_instance *c)
 {
     c->values.have_outputs = 0;
     c->values.have_derivatives = 0;
+    c->values.have_summaries = 0;
 }
 
 const double *fmu_derivatives(fmu_instance *c, int *flag)
@@ -30,7 +31,7 @@ const double *fmu_derivatives(fmu_instance *c, int *flag)
     return v->ydot;
 }
 
-static const double *outputs(fmu_instance *c)
+const double *fmu_outputs(fmu_instance *c)
 {
     fmu_values *v = &c->values;
     if (!v->have_outputs) {
@@ -38,6 +39,36 @@ static const double *outputs(fmu_instance *c)
         v->have_outputs = 1;
     }
     return v->out;
+}
+
+/* The summaries of the run from its start to (t, y), as impactgen run's of a run that ends at
+ * t: the tally with (t, y) as its latest sample. The first impact's is final once it ended. */
+static const fmu_values *summaries(fmu_instance *c)
+{
+    fmu_values *v = &c->values;
+    if (!v->have_summaries) {
+        ig_tally now = c->tally;
+        ig_read_point(&now.last, c->t, c->y, fmu_outputs(c));
+        ig_summarize(&now, &v->run, &v->first_impact);
+        v->have_summaries = 1;
+    }
+    return v;
+}
+
+/* A field of a summary (VAR_RUN, VAR_FIRST_IMPACT): its byte offset in ig_summary is the
+ * variable's index; an Integer variable reads an int there. */
+static double summary_value(fmu_instance *c, const fmu_variable *v)
+{
+    const fmu_values *values = summaries(c);
+    const char *field = (const char *)(v->kind == VAR_RUN ? &values->run : &values->first_impact) + v->index;
+    if (v->type == 'I') {
+        int n;
+        memcpy(&n, field, sizeof n);
+        return n;
+    }
+    double x;
+    memcpy(&x, field, sizeof x);
+    return x;
 }
 
 static const fmu_variable *variable(const fmu_instance *c, fmi2ValueReference vr, char type)
@@ -95,10 +126,14 @@ static double real_value(fmu_instance *c, const fmu_variable *v)
         const double *ydot = fmu_derivatives(c, &flag);
         return flag != 0 ? NAN : ydot[v->index];
     }
-    case VAR_OUTPUT: return outputs(c)[v->index];
+    case VAR_OUTPUT: return fmu_outputs(c)[v->index];
+    case VAR_PHASE:
+    case VAR_IMPACTS:
     case VAR_DELTA_MAX:
     case VAR_DELTA_R:
     case VAR_P_MAX: return machine_value(c, v->kind, v->index);
+    case VAR_RUN:
+    case VAR_FIRST_IMPACT: return summary_value(c, v);
     default: return NAN;
     }
 }
@@ -124,7 +159,8 @@ fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], siz
     for (size_t k = 0; k < nvr; ++k) {
         const fmu_variable *v = variable(c, vr[k], 'I');
         if (!v) return fmi2Error;
-        value[k] = (fmi2Integer)machine_value(c, v->kind, v->index);
+        const double x = real_value(c, v);
+        value[k] = isfinite(x) ? (fmi2Integer)x : 0;  /* (not finite: the start values are refused) */
     }
     return fmi2OK;
 }
