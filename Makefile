@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml scripts/setup.sh
 
 demo: $(STAMP)
 	$(VENV)/bin/impactgen run scenes/paper.toml
-	$(VENV)/bin/python scripts/paper_table.py
+	$(VENV)/bin/impactgen paper-table
 
 # the tests on every core (pytest-xdist), a test file's tests in one worker so that the file's
 # fixtures (FMUs, cross-checks) are built once, the files in the collection's order (the tests

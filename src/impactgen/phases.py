@@ -2,7 +2,7 @@
 
 The machine (native/model_machine.c, plain C written once for every model) decides everything of
 MODEL section 4: which force law and which events with directions each machine state has,
-and what each switch records (delta_m, P_m, delta_r, R_res, stick/slip, sustained contact,
+and what each switch records (delta_max, P_max, delta_r, R_res, stick/slip, sustained contact,
 lift-off, later impacts). Its loop runs in C (ig_run in the glue, through session.py): a
 whole impact is one C call. This module turns what the loop recorded, the samples and the
 switch records (one per point that switched, tally.h), into the result: one `Impact` per

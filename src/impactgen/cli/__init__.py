@@ -13,6 +13,8 @@
     impactgen compare SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
     impactgen sweep SCENE --vary KEY=SPEC [...] [--out DIR]
     impactgen fmu SCENE|--links N [--kind me|cs|both] [--out FILE.fmu]
+    impactgen paper-table [--engine c|reference] [--json]   the paper's Table 2 beside the published values
+    impactgen materials [--json]                the named materials and their sources
 
 The package holds one job per module: `parser` (the arguments), `commands` (one function per
 command), `report` (the text `impactgen run` prints) and `generated` (the folder `generate`

@@ -33,8 +33,8 @@ def _fmu(args: argparse.Namespace) -> int:
     path = build_fmu(scene, out, args.kind)
     kinds = {"me": "Model Exchange", "cs": "Co-Simulation", "both": "Model Exchange and Co-Simulation"}
     print(f"{path}: FMI 2.0 {kinds[args.kind]}, {path.stat().st_size / 1024:.0f} KB "
-          f"({time.perf_counter() - started:.1f} s). Simulate it at rtol 1e-8 to 1e-10, e.g. "
-          f"fmpy simulate {path} --relative-tolerance 1e-10 (docs/embedding.md)")
+          f"({time.perf_counter() - started:.1f} s). Its default experiment is the scene's stop time and "
+          f"rtol: fmpy simulate {path} (docs/embedding.md)")
     return 0
 
 
