@@ -23,7 +23,7 @@ from ..errors import ImpactgenError, SceneError, excerpt, warn
 from ..export import trajectory_columns, write_parquet, write_table
 from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
-from . import execute
+from . import batch, execute
 from .spec import SweepSpec
 
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
@@ -168,6 +168,7 @@ class ChunkColumns:
         self.warnings: list[str] = []
         self.wall_s: list[float] = []
         self.trajectories: dict[int, dict[str, tuple[np.ndarray, str]]] = {}
+        self.batch: batch.BatchRows | None = None  # every case's row, from one C call (instead of `add`)
 
     def add(self, summary: tuple[Record, int] | None, status: str, message: str, warnings: str,
             wall_s: float) -> None:
@@ -184,6 +185,10 @@ class ChunkColumns:
         keys = dict.fromkeys(key for _, overrides in self.cases for key in overrides)
         columns = {"case": _packed([index for index, _ in self.cases])}
         columns.update({key: _packed([overrides.get(key) for _, overrides in self.cases]) for key in keys})
+        ran = self.batch
+        if ran is not None:
+            columns.update(status=ran.status, message=ran.message, warnings=[""] * len(self.cases), wall_s=ran.wall_s)
+            return ChunkRows({**columns, **_record_columns(ran.records, ran.links)}, self.trajectories)
         columns.update(status=self.status, message=self.message, warnings=self.warnings,
                        wall_s=np.array(self.wall_s, dtype=float))
         return ChunkRows({**columns, **summary_columns(self.summaries)}, self.trajectories)
@@ -217,12 +222,40 @@ def _packed(values: list[Any]) -> np.ndarray | list[Any]:
 
 
 def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> ChunkRows:
-    """The rows of some cases of one scene (what a worker process or Dask task runs)."""
+    """The rows of some cases of one scene (what a worker process or Dask task runs): in one C
+    call (batch.py) those it can take, the others case by case through `simulate`."""
     base = scene_from_dict(scene_dict)
     out = ChunkColumns(cases)
-    for index, overrides in cases:
-        run_case(out, base, index, overrides, index in options.keep_trajectories)
+    ran = _batched(base, cases, options)
+    if ran is None:
+        for index, overrides in cases:
+            run_case(out, base, index, overrides, index in options.keep_trajectories)
+        return out.rows()
+    if not ran.again.any():  # the common chunk: every case in C
+        out.batch = ran
+        return out.rows()
+    record = ran.records.dtype
+    for k, (index, overrides) in enumerate(cases):
+        if ran.again[k]:
+            run_case(out, base, index, overrides, index in options.keep_trajectories)
+        else:
+            out.add(((ran.records[k].tobytes(), record), base.n), ran.status[k], ran.message[k], "", ran.wall_s[k])
     return out.rows()
+
+
+def _batched(base: Scene, cases: execute.Chunk, options: CaseOptions) -> batch.BatchRows | None:
+    """The chunk's cases run in one C call (batch.run_plan), or None when the batch cannot take
+    them: cases that vary different keys, or keys that are no model parameter nor initial element."""
+    keys = tuple(cases[0][1]) if cases else ()
+    if not keys or any(tuple(overrides) != keys for _, overrides in cases):
+        return None
+    plan = batch.plan_for(base, keys)
+    if plan is None:
+        return None
+    values, usable = batch.case_values(keys, [overrides for _, overrides in cases])
+    if options.keep_trajectories:
+        usable &= np.array([index not in options.keep_trajectories for index, _ in cases])
+    return batch.run_plan(plan, values, usable)
 
 
 def evenly_chosen(count: int, total: int) -> frozenset[int]:
@@ -464,9 +497,13 @@ def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec
 
 
 def _column_order(names: Iterable[str], spec: SweepSpec) -> list[str]:
+    return column_order(names, [a.key for a in spec.axes])
+
+
+def column_order(names: Iterable[str], keys: Iterable[str]) -> list[str]:
     """case, the varied keys, the other columns as they come, then ROW_END."""
     names = list(names)
-    front = ["case", *(a.key for a in spec.axes)]
+    front = ["case", *keys]
     middle = [c for c in names if c not in front and c not in ROW_END]
     return front + middle + [c for c in ROW_END if c in names]
 
