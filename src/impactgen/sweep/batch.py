@@ -24,7 +24,8 @@ from ..scene import TOUCH_TOLERANCE, Scene, split_key
 from ..validity import ENERGY_FLOOR, ENERGY_MARGIN, JACKSON_GREEN_MAX_W, RESOLUTION_MARGIN
 
 INITIAL_KEYS = ("q", "q_deg", "u")  # [initial] keys the batch takes element by element
-NOT_BATCHED = ("surface.height",)  # a parameter whose value also decides another ("initial")
+NOT_BATCHED = ("surface.height",)
+FRICTION = "contact.friction"  # 0 or not chooses the model: a case on the other side runs per case  # a parameter whose value also decides another ("initial")
 # The warning screen: a case whose value is within this factor of a validity threshold runs
 # on the per-case path, which words the warnings (validity.py); rounding moves none so far.
 SCREEN_MARGIN = 2.0
@@ -122,6 +123,8 @@ def run_plan(plan: Plan, values: np.ndarray, usable: np.ndarray) -> BatchRows:
     again = ~usable | ~np.isfinite(values).all(axis=1)
     if plan.heights_change:
         again |= _may_start_inside(plan, values, y0)
+    if FRICTION in plan.keys:  # friction on or off is the model's structure (engines.model_spec)
+        again |= (values[:, plan.keys.index(FRICTION)] > 0) != (scene.contact.friction > 0)
     todo = np.flatnonzero(~again)
     m = len(todo)
     dtype = record_dtype(ffi, "ig_summary")

@@ -7,10 +7,13 @@ command resumes, computing only the missing cases. Two sweeps into one folder ar
 """
 from __future__ import annotations
 
+import collections
+import contextlib
 import fcntl
 import itertools
 import json
 import os
+import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +22,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 
 from ..engines import simulate
-from ..errors import ImpactgenError, SceneError, excerpt, warn
+from ..errors import ImpactgenError, SceneError, ValidityWarning, excerpt, warn
 from ..export import trajectory_columns, write_parquet, write_table
 from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
@@ -32,6 +35,7 @@ RESULT_FILE = "sweep.parquet"
 # (pandas.read_parquet, pyarrow.dataset, dask.dataframe): the folder reads as one dataset,
 # each case once.
 PARTS, STAMP, TRAJECTORIES, FIGURES = "_parts", "_sweep.json", "_trajectories", "_figures"
+LOCK = ".lock"  # held while a sweep writes into the folder, removed when it finishes
 OLD_NAMES = {"parts": PARTS, "sweep.json": STAMP, "trajectories": TRAJECTORIES, "figures": FIGURES}  # before 0.2
 
 Progress = Callable[[int], None]  # called with the number of cases just finished
@@ -265,12 +269,18 @@ def evenly_chosen(count: int, total: int) -> frozenset[int]:
     return frozenset(int(i) for i in np.unique(np.linspace(0, total - 1, min(count, total)).round()))
 
 
+STRUCTURAL = ("chain.links", "contact.model", "contact.friction", "contact.friction_mode", "solver.t_end",
+              "solver.jacobian", "solver.method")  # keys whose values may choose another compiled model
+
+
+def structural_keys(spec: SweepSpec) -> list[str]:
+    return [a.key for a in spec.axes if a.key.split("[")[0] in STRUCTURAL]
+
+
 def structure_order(spec: SweepSpec, cases: list[dict[str, Any]]) -> list[int]:
     """Case indices with the cases of one model structure together (links, contact model,
     friction on or off and its kind), so a worker loads each compiled model once."""
-    structural = [a.key for a in spec.axes if a.key.split("[")[0] in
-                  ("chain.links", "contact.model", "contact.friction", "contact.friction_mode",
-                   "solver.t_end", "solver.jacobian", "solver.method")]
+    structural = structural_keys(spec)
     if not structural:
         return list(range(len(cases)))
 
@@ -288,7 +298,7 @@ class OutputFolder:
         self.meta = {"impactgen.scene": scene.to_toml(), "impactgen.sweep": spec.describe()}
         try:
             path.mkdir(parents=True, exist_ok=True)
-            self._lock = open(path / ".lock", "w")
+            self._lock = open(path / LOCK, "w")
         except OSError as exc:
             raise SceneError("--out", f"cannot use the folder {path}: {exc}") from None
         try:  # a lock on the open file: it ends with the last process holding it (none is a worker)
@@ -336,6 +346,11 @@ class OutputFolder:
         _write_dataset_metadata(path)
         return path
 
+    def finish(self) -> None:
+        """The sweep is complete: its lock file goes (the lock itself is held until `close`)."""
+        with contextlib.suppress(OSError):
+            (self.path / LOCK).unlink()
+
     def close(self) -> None:
         execute.NOT_FOR_WORKERS.discard(self._lock.fileno())
         fcntl.flock(self._lock, fcntl.LOCK_UN)
@@ -369,7 +384,7 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
     `scheduler` runs the chunks on a Dask cluster (an address, or "local"); otherwise a local
     pool of `workers` processes (default: every usable core) runs them. `trajectories` keeps
     the samples of that many evenly chosen cases (or of the listed case numbers) in
-    `out/trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
+    `out/_trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
     into `out` had finished (they are not run again). Every argument is checked before any
     case runs; workers beyond `worker_limit` are not started, and a warning says so.
     """
@@ -435,11 +450,56 @@ def capped_workers(asked: int | None, cases: int) -> int:
     return int(asked)
 
 
+class CaseList:
+    """The cases still to run, in the order they go out, made a chunk at a time when sliced
+    (as execute's backends slice it): the driver never holds every case of a large sweep."""
+
+    def __init__(self, spec: SweepSpec, indices: np.ndarray, cases: list[dict[str, Any]] | None = None):
+        self.spec, self.indices, self.cases = spec, indices, cases  # `cases`: all, made already
+
+    def __len__(self) -> int:
+        return len(self.indices)
+
+    def __getitem__(self, part: slice) -> execute.Chunk:
+        chosen = self.indices[part].tolist()
+        if self.cases is not None:
+            return [(i, self.cases[i]) for i in chosen]
+        return list(zip(chosen, self.spec.cases_at(np.asarray(chosen, dtype=np.int64))))
+
+
+def _todo(spec: SweepSpec, finished: set[int]) -> CaseList:
+    """The cases not finished: in case order, or, when keys of the model's structure vary,
+    with the cases of one structure together (`structure_order`; such sweeps are made whole)."""
+    if structural_keys(spec):
+        cases = spec.cases()
+        order = [i for i in structure_order(spec, cases) if i not in finished]
+        return CaseList(spec, np.array(order, dtype=np.int64), cases)
+    indices = np.arange(spec.count(), dtype=np.int64)
+    if finished:
+        indices = np.setdiff1d(indices, np.fromiter(finished, dtype=np.int64, count=len(finished)))
+    return CaseList(spec, indices)
+
+
+def _warn_validity(frame) -> None:
+    """One ValidityWarning for the sweep when some of its cases have validity warnings: how
+    many, and the most common kind (a case's first warning, its numbers left out)."""
+    warned = [text for text in frame["warnings"] if isinstance(text, str) and text]
+    if not warned:
+        return
+    kinds = collections.Counter(NUMBERS.sub("#", text.split(" | ")[0]) for text in warned)
+    kind, count = kinds.most_common(1)[0]
+    example = next(text.split(" | ")[0] for text in warned if NUMBERS.sub("#", text.split(" | ")[0]) == kind)
+    warn(f"{len(warned)} of {len(frame)} cases have validity warnings (the table's `warnings` column); the most "
+         f"common, in {count}: {example}", ValidityWarning)
+
+
+NUMBERS = re.compile(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?")  # the numbers in a warning's text
+
+
 def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, progress: Progress | None,
          scheduler: str | None, trajectories: int | Iterable[int], on_resume: Callable[[int], None] | None):
-    cases = spec.cases()
-    spec.check(scene, cases)
-    keep = _kept_cases(trajectories, len(cases))
+    spec.check(scene)
+    keep = _kept_cases(trajectories, spec.count())
     if keep and out is None:
         raise SceneError("--trajectories", "kept trajectories are written into the --out folder: give one")
     folder = OutputFolder(out, scene, spec) if out is not None else None
@@ -450,7 +510,7 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
             on_resume(len(finished))
         if progress and finished:
             progress(len(finished))
-        todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in finished]
+        todo = _todo(spec, finished)
         parts: list[ChunkRows] = []  # every new row, made a DataFrame once at the end
         for done in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
             chunk = done if isinstance(done, ChunkRows) else lost_rows(done)
@@ -462,8 +522,11 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
             if progress:
                 progress(len(chunk))
         frame = _table(frames, ChunkRows.joined(parts) if parts else None, spec)
+        del parts, frames
         if folder:
             folder.write_result(frame)
+            folder.finish()
+        _warn_validity(frame)
         return frame
     finally:
         if folder:
