@@ -30,6 +30,7 @@ FRICTION = "contact.friction"  # 0 or not chooses the model: a case on the other
 # on the per-case path, which words the warnings (validity.py); rounding moves none so far.
 SCREEN_MARGIN = 2.0
 MAX_PLANS = 8  # plans kept per process (a sweep has one)
+PLAIN_NUMBERS = {float, int}
 NUMBER = (float, int, np.floating, np.integer)
 
 
@@ -243,14 +244,25 @@ def _may_warn(plan: Plan, summaries: np.ndarray, contact: np.ndarray, chain_leng
 
 
 def case_values(keys: tuple[str, ...], cases: list[Mapping[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
-    """The cases' values of `keys` as floats (rows), and which cases are all real numbers."""
+    """The cases' values of `keys` as floats (rows), and which cases are all real numbers
+    (a bool, a string or a list is not: such a case runs per case, which says what is wrong)."""
     values = np.full((len(cases), len(keys)), np.nan)
     usable = np.ones(len(cases), bool)
-    for i, case in enumerate(cases):
-        row = [case.get(key) for key in keys]
-        if all(isinstance(v, NUMBER) and not isinstance(v, (bool, np.bool_)) for v in row):
-            values[i] = row
-        else:
+    for position, key in enumerate(keys):
+        column = [case[key] for case in cases]
+        if set(map(type, column)) <= PLAIN_NUMBERS:  # the common column: floats (ints) only, at C speed
+            try:
+                values[:, position] = column
+                continue
+            except OverflowError:  # an integer beyond a float: found below
+                pass
+        for i, v in enumerate(column):
+            try:
+                if isinstance(v, NUMBER) and not isinstance(v, (bool, np.bool_)):
+                    values[i, position] = v
+                    continue
+            except OverflowError:
+                pass
             usable[i] = False
     return values, usable
 
