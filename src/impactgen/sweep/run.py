@@ -511,18 +511,20 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
         if progress and finished:
             progress(len(finished))
         todo = _todo(spec, finished)
-        parts: list[ChunkRows] = []  # every new row, made a DataFrame once at the end
+        rows = Gathered(len(todo))  # every new row, made a DataFrame once at the end
         for done in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
             chunk = done if isinstance(done, ChunkRows) else lost_rows(done)
             if folder:
                 for case, kept in chunk.trajectories.items():
                     folder.write_trajectory(case, kept)
                 folder.write_part(chunk)
-            parts.append(chunk)
+            rows.add(chunk)
+            n_new = len(chunk)
+            del chunk, done
             if progress:
-                progress(len(chunk))
-        frame = _table(frames, ChunkRows.joined(parts) if parts else None, spec)
-        del parts, frames
+                progress(n_new)
+        frame = _table(frames, rows.columns() if rows.filled else None, spec)
+        del rows, frames
         if folder:
             folder.write_result(frame)
             folder.finish()
@@ -536,6 +538,56 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
 ROW_END = ("status", "message", "warnings", "wall_s")  # the last columns of the table
 
 
+class Gathered:
+    """A sweep's new rows as its chunks come, each column gathered into one array (or list) of
+    the sweep's size, allocated at its first chunk: the driver holds each value once, not once
+    per chunk and again joined (a million cases had taken over a gigabyte). A column a chunk
+    lacks is NaN there (None for text); counts that meet a NaN or a float become floats."""
+
+    def __init__(self, total: int):
+        self.total, self.filled = total, 0
+        self._columns: dict[str, np.ndarray | list[Any]] = {}
+
+    def add(self, chunk: ChunkRows) -> None:
+        n, at = len(chunk), self.filled
+        for name, column in chunk.columns.items():
+            target = self._columns.get(name)
+            if target is None:
+                target = self._columns[name] = self._empty(column, at)
+            if isinstance(target, np.ndarray) and not (isinstance(column, np.ndarray) and
+                                                       np.can_cast(column.dtype, target.dtype, "same_kind")):
+                target = self._columns[name] = self._widened(target, column)
+            target[at:at + n] = column
+        for name, target in self._columns.items():
+            if name not in chunk.columns and isinstance(target, np.ndarray):
+                if target.dtype.kind != "f":
+                    target = self._columns[name] = target.astype(float)
+                target[at:at + n] = np.nan
+        self.filled += n
+
+    def _empty(self, column: np.ndarray | list[Any], missing: int) -> np.ndarray | list[Any]:
+        """A column of the sweep's size for `column`'s values; its first `missing` rows lack it."""
+        if isinstance(column, np.ndarray) and column.dtype.kind in "iuf":
+            if column.dtype.kind == "f" or missing:
+                return np.full(self.total, np.nan)
+            return np.zeros(self.total, column.dtype)
+        return [None] * self.total
+
+    def _widened(self, target: np.ndarray, column: np.ndarray | list[Any]) -> np.ndarray | list[Any]:
+        """`target` made able to hold `column` too: floats, or a list when it is not numbers."""
+        if isinstance(column, np.ndarray) and column.dtype.kind in "iuf":
+            return target.astype(float)
+        return target[:self.filled].tolist() + [None] * (self.total - self.filled)
+
+    def columns(self) -> dict[str, np.ndarray | list[Any]]:
+        """The columns of the rows gathered, in the order they came (handed over: emptied here)."""
+        out = {}
+        for name in list(self._columns):
+            column = self._columns.pop(name)
+            out[name] = column[:self.filled] if self.filled < self.total else column
+        return out
+
+
 def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec: SweepSpec):
     """The table in case order: case, the varied keys, the summary fields, then status,
     message, warnings and wall time. `frames` are the parts of an earlier run, `columns` this
@@ -545,11 +597,12 @@ def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec
     import pandas as pd
     if columns is not None and not frames:
         case = np.asarray(columns["case"])
-        if (np.diff(case) > 0).all():  # in order already, each case once (the parts joined in order)
-            return pd.DataFrame({name: columns[name] for name in _column_order(columns, spec)})
-        order = np.argsort(case, kind="stable")
-        if not (np.diff(case[order]) == 0).any():
-            return pd.DataFrame({name: _taken(columns[name], order) for name in _column_order(columns, spec)})
+        order = None if (np.diff(case) > 0).all() else np.argsort(case, kind="stable")
+        if order is None or not (np.diff(case[order]) == 0).any():  # each case once
+            for name in list(columns) if order is not None else ():  # one column at a time: one more in memory
+                columns[name] = _taken(columns[name], order)
+            # copy=False: pandas keeps the arrays as they are (one block each), not joined into a copy
+            return pd.DataFrame({name: columns[name] for name in _column_order(columns, spec)}, copy=False)
     if columns is not None:
         frames = [*frames, pd.DataFrame(columns)]
     if not frames:
