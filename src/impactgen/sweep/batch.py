@@ -93,21 +93,25 @@ def _new_plan(scene: Scene, keys: tuple[str, ...]) -> Plan | None:
     settings.t_stop = solver.t_max if solver.t_end is None else solver.t_end
     from ..phases import MAX_SEGMENTS
     settings.max_records = MAX_SEGMENTS
-    heights = any(split_key(k)[0] == "initial" and split_key(k)[1] != "u" or k.startswith("chain.length")
-                  for k in keys)
+    heights = any(_moves_the_start(key) for key in keys)
     return Plan(scene, keys, model, fill_params(model, scene), tuple(param_keys), tuple(param_index), settings,
                 heights)
 
 
+def _moves_the_start(key: str) -> bool:
+    """Whether `key` moves the chain's points at the start (an angle, a length)."""
+    section, name, _ = split_key(key)
+    return section == "initial" and name != "u" or section == "chain" and name == "length"
+
+
 @dataclass
 class BatchRows:
-    """What the batch gives for some cases: per case its summary record (`dtype`), status and
-    message, and whether it must run on the per-case path instead (`again`)."""
+    """What the batch gives for some cases: per case its summary record (ig_summary's dtype) and
+    its time, of status "ok" (no message, no warning), unless it must run on the per-case path
+    instead (`again`)."""
 
     records: np.ndarray
-    links: int  # the model's (the summaries' final states hold 2 links values each)
-    status: list[str]
-    message: list[str]
+    links: int  # the model's: y_final begins with its angles, then its speeds
     wall_s: np.ndarray
     again: np.ndarray  # bool per case
 
@@ -131,7 +135,6 @@ def run_plan(plan: Plan, values: np.ndarray, usable: np.ndarray) -> BatchRows:
     dtype = record_dtype(ffi, "ig_summary")
     records = np.zeros(n, dtype)
     wall = np.zeros(n)
-    status, message = ["failed"] * n, [""] * n
     if m:
         params = np.ascontiguousarray(values[todo][:, list(plan.param_keys)], dtype=float)
         starts = np.ascontiguousarray(y0[todo])
@@ -150,19 +153,13 @@ def run_plan(plan: Plan, values: np.ndarray, usable: np.ndarray) -> BatchRows:
         if not (ran & (flag < 0)).any():  # a failed solver is not handed to the next run
             session.close()
         ok = ran & (flag == lib.IG_RUN_DONE)
-        if settings_to_time(plan):
+        if scene.solver.t_end is not None:  # a run to a time is ok at its end (phases._end_without_event)
             ok |= ran & (flag == lib.IG_REACHED_END)
         ok &= ~_may_warn(plan, summaries, contact, _lengths(plan, values[todo]).sum(axis=1))
         records[todo] = summaries
         wall[todo] = times
         again[todo[~ok]] = True
-        for k in todo[ok]:
-            status[k] = "ok"
-    return BatchRows(records, scene.n, status, message, wall, again)
-
-
-def settings_to_time(plan: Plan) -> bool:
-    return plan.scene.solver.t_end is not None
+    return BatchRows(records, scene.n, wall, again)
 
 
 def _c(ffi, ctype: str, array: np.ndarray):

@@ -191,7 +191,8 @@ class ChunkColumns:
         columns.update({key: _packed([overrides.get(key) for _, overrides in self.cases]) for key in keys})
         ran = self.batch
         if ran is not None:
-            columns.update(status=ran.status, message=ran.message, warnings=[""] * len(self.cases), wall_s=ran.wall_s)
+            n = len(self.cases)
+            columns.update(status=["ok"] * n, message=[""] * n, warnings=[""] * n, wall_s=ran.wall_s)
             return ChunkRows({**columns, **_record_columns(ran.records, ran.links)}, self.trajectories)
         columns.update(status=self.status, message=self.message, warnings=self.warnings,
                        wall_s=np.array(self.wall_s, dtype=float))
@@ -243,7 +244,7 @@ def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOpt
         if ran.again[k]:
             run_case(out, base, index, overrides, index in options.keep_trajectories)
         else:
-            out.add(((ran.records[k].tobytes(), record), base.n), ran.status[k], ran.message[k], "", ran.wall_s[k])
+            out.add(((ran.records[k].tobytes(), record), base.n), "ok", "", "", ran.wall_s[k])
     return out.rows()
 
 
