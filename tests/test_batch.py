@@ -111,3 +111,11 @@ def test_a_sweep_s_validity_warnings_are_one_python_warning():
     validity = [w for w in caught if issubclass(w.category, ValidityWarning)]
     assert len(validity) == 1 and warned >= 1
     assert str(validity[0].message).startswith(f"{warned} of 3 cases")
+
+
+def test_run_batch_s_docstring_example_runs():
+    import doctest
+    import importlib
+    module = importlib.import_module("impactgen.sweep.ensemble")  # (impactgen.sweep is the function)
+    failures, tried = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert tried > 0 and failures == 0
