@@ -278,16 +278,21 @@ def structural_keys(spec: SweepSpec) -> list[str]:
     return [a.key for a in spec.axes if a.key.split("[")[0] in STRUCTURAL]
 
 
-def structure_order(spec: SweepSpec, cases: list[dict[str, Any]]) -> list[int]:
+def structure_order(spec: SweepSpec) -> np.ndarray:
     """Case indices with the cases of one model structure together (links, contact model,
-    friction on or off and its kind), so a worker loads each compiled model once."""
+    friction on or off and its kind), so a worker loads each compiled model once; made from
+    the structural keys' columns alone (a million cases are never made at once for it)."""
     structural = structural_keys(spec)
-    if not structural:
-        return list(range(len(cases)))
-
-    def key(i: int) -> tuple:
-        return tuple(repr(cases[i][k] if k != "contact.friction" else cases[i][k] > 0) for k in structural)
-    return sorted(range(len(cases)), key=key)
+    codes = []
+    for key in reversed(structural):  # np.lexsort sorts by its last key first
+        column = spec.column(key)
+        if key == "contact.friction":  # on or off: the friction's size is no structure
+            codes.append(column > 0 if isinstance(column, np.ndarray) else np.array([v > 0 for v in column]))
+            continue
+        codes.append(np.unique(np.array([repr(v) for v in column], dtype=object), return_inverse=True)[1])
+    if not codes:
+        return np.arange(spec.count(), dtype=np.int64)
+    return np.lexsort(codes).astype(np.int64)  # stable: case order within a structure
 
 
 class OutputFolder:
@@ -455,30 +460,26 @@ class CaseList:
     """The cases still to run, in the order they go out, made a chunk at a time when sliced
     (as execute's backends slice it): the driver never holds every case of a large sweep."""
 
-    def __init__(self, spec: SweepSpec, indices: np.ndarray, cases: list[dict[str, Any]] | None = None):
-        self.spec, self.indices, self.cases = spec, indices, cases  # `cases`: all, made already
+    def __init__(self, spec: SweepSpec, indices: np.ndarray):
+        self.spec, self.indices = spec, indices
 
     def __len__(self) -> int:
         return len(self.indices)
 
     def __getitem__(self, part: slice) -> execute.Chunk:
-        chosen = self.indices[part].tolist()
-        if self.cases is not None:
-            return [(i, self.cases[i]) for i in chosen]
-        return list(zip(chosen, self.spec.cases_at(np.asarray(chosen, dtype=np.int64))))
+        chosen = self.indices[part]
+        ascending = np.sort(chosen)  # cases_at takes them in case order
+        made = dict(zip(ascending.tolist(), self.spec.cases_at(ascending)))
+        return [(i, made[i]) for i in chosen.tolist()]
 
 
 def _todo(spec: SweepSpec, finished: set[int]) -> CaseList:
-    """The cases not finished: in case order, or, when keys of the model's structure vary,
-    with the cases of one structure together (`structure_order`; such sweeps are made whole)."""
-    if structural_keys(spec):
-        cases = spec.cases()
-        order = [i for i in structure_order(spec, cases) if i not in finished]
-        return CaseList(spec, np.array(order, dtype=np.int64), cases)
-    indices = np.arange(spec.count(), dtype=np.int64)
+    """The cases not finished, with the cases of one model structure together
+    (`structure_order`: in case order when no key of the structure varies)."""
+    order = structure_order(spec)
     if finished:
-        indices = np.setdiff1d(indices, np.fromiter(finished, dtype=np.int64, count=len(finished)))
-    return CaseList(spec, indices)
+        order = order[~np.isin(order, np.fromiter(finished, dtype=np.int64, count=len(finished)))]
+    return CaseList(spec, order)
 
 
 def _warn_validity(frame) -> None:

@@ -190,6 +190,18 @@ class SweepSpec:
             return [{keys[0]: value} for value in columns[0]]
         return [dict(zip(keys, row)) for row in zip(*columns)]
 
+    def column(self, key: str) -> list[Any] | np.ndarray:
+        """Every case's value of `key`, in case order (made a block of draws at a time; an
+        array of a distribution's draws)."""
+        axis = next(k for k, a in enumerate(self.axes) if a.key == key)
+        if not self.random:
+            places = np.unravel_index(np.arange(self.count()), [len(a.values) for a in self.axes])[axis]
+            return [self.axes[axis].values[i] for i in places.tolist()]
+        blocks = [self._block(block)[axis] for block in range(-(-self.random // DRAW_BLOCK))]
+        if self.axes[axis].distribution:
+            return np.concatenate(blocks)
+        return [value for drawn in blocks for value in self.axes[axis].taken(drawn)]
+
     def _block(self, block: int) -> list[np.ndarray]:
         """The draws of cases block * DRAW_BLOCK onwards, each axis's in turn: the first block
         from the seed alone (a sweep of up to DRAW_BLOCK cases draws as it always did), each
@@ -211,6 +223,12 @@ class SweepSpec:
         key's own check is a range); the values of a list or grid are checked as listed."""
         links_vary = any(a.key == "chain.links" for a in self.axes)
         first = self.cases_at(np.arange(min(1, self.count())))
+        blocks = -(-self.random // DRAW_BLOCK)
+        ranges = [(np.inf, -np.inf)] * len(self.axes)  # each drawn axis's smallest and largest
+        for block in range(blocks):
+            drawn = self._block(block)
+            ranges = [(min(lo, d.min().item()), max(hi, d.max().item())) if a.distribution else (lo, hi)
+                      for (lo, hi), d, a in zip(ranges, drawn, self.axes)]
         for axis in self.axes:
             try:  # the key (and its index) fits this scene
                 scene.replace({axis.key: first[0][axis.key]} if first else {})
@@ -224,12 +242,12 @@ class SweepSpec:
                 if not axis.distribution:
                     check_values(axis.key, axis.values, scene.n)
                     continue
-                for block in range(-(-self.random // DRAW_BLOCK)):
-                    drawn = self._block(block)[self.axes.index(axis)]
-                    try:
-                        check_values(axis.key, [drawn.min().item(), drawn.max().item()], scene.n)
-                    except SceneError:  # the first value refused, as it comes
-                        check_values(axis.key, drawn.tolist(), scene.n)
+                low, high = ranges[self.axes.index(axis)]
+                try:
+                    check_values(axis.key, [low, high], scene.n)
+                except SceneError:  # the first value refused, in case order
+                    for block in range(blocks):
+                        check_values(axis.key, self._block(block)[self.axes.index(axis)].tolist(), scene.n)
             except SceneError as exc:
                 drawn = " (drawn from the distribution: narrow it or choose another)" if axis.distribution else ""
                 raise SceneError(exc.key, str(exc).split(": ", 1)[-1] + drawn) from None
