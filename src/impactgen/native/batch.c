@@ -53,19 +53,22 @@ static int other_model(model_params *p, const double *y, const int *slot)
     return 0;
 }
 
-/* The contact constants the validity warnings read of case p: the point of its first impact. */
+/* The contact constants the validity warnings read of case p: the point of its first impact's
+ * (the three-phase law's; NAN for the others, whose impacts the warnings do not judge so). */
 static void contact_of(const model_params *p, int first_point, double *out)
 {
+#if MODEL_PLASTIC
     int k = MODEL_TIP_POINT;
     for (int j = 0; j < MODEL_NCONTACT; ++j) {
         if (model_point_number(j) == first_point) k = j;
     }
     out[0] = p->point[k].R;
     out[1] = p->point[k].delta_c;
-#if MODEL_PLASTIC
     out[2] = p->B;
 #else
-    out[2] = NAN;
+    (void)p;
+    (void)first_point;
+    out[0] = out[1] = out[2] = NAN;
 #endif
 }
 
