@@ -24,13 +24,13 @@ from ..scene import TOUCH_TOLERANCE, Scene, split_key
 from ..validity import ENERGY_FLOOR, ENERGY_MARGIN, JACKSON_GREEN_MAX_W, RESOLUTION_MARGIN
 
 INITIAL_KEYS = ("q", "q_deg", "u")  # [initial] keys the batch takes element by element
-NOT_BATCHED = ("surface.height",)
-FRICTION = "contact.friction"  # 0 or not chooses the model: a case on the other side runs per case  # a parameter whose value also decides another ("initial")
-# The warning screen: a case whose value is within this factor of a validity threshold runs
-# on the per-case path, which words the warnings (validity.py); rounding moves none so far.
+NOT_BATCHED = ("surface.height",)  # a parameter whose value also decides another ("initial")
+FRICTION = "contact.friction"  # 0 or not chooses the model: a case on the other side runs per case
+# The warning screen: a case within this factor of a validity threshold runs on the per-case
+# path, which words the warnings (validity.py).
 SCREEN_MARGIN = 2.0
 MAX_PLANS = 8  # plans kept per process (a sweep has one)
-PLAIN_NUMBERS = {float, int}
+PLAIN_NUMBERS = {float, int}  # a column of these goes into an array at once
 NUMBER = (float, int, np.floating, np.integer)
 
 

@@ -108,7 +108,8 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
     from the chunks sent with it, and it alone is tried up to MAX_CHUNK_TRIES times."""
     # (chunk, the pools it broke with): a chunk is a (start, stop) of `todo` until sent, its
     # cases made then, so that the driver holds the cases of the chunks in flight only
-    queue: deque[tuple[Chunk | tuple[int, int], int]] = deque((bounds, 0) for bounds in chunk_bounds(len(todo), workers))
+    queue: deque[tuple[Chunk | tuple[int, int], int]] = deque((bounds, 0)
+                                                              for bounds in chunk_bounds(len(todo), workers))
     while queue:
         context = _start_method()
         inherited = tuple(NOT_FOR_WORKERS) if context.get_start_method() == "fork" else ()

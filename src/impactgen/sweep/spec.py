@@ -184,8 +184,8 @@ class SweepSpec:
                 for column, axis, values in zip(columns, self.axes, drawn):
                     column.extend(axis.taken(values[rows]))
         else:
-            places = np.unravel_index(indices, [len(a.values) for a in self.axes]) if len(indices) else [[]] * len(keys)
-            columns = [[a.values[i] for i in place.tolist()] if len(indices) else [] for a, place in zip(self.axes, places)]
+            places = np.unravel_index(indices, [len(a.values) for a in self.axes])  # itertools.product's order
+            columns = [[a.values[i] for i in place.tolist()] for a, place in zip(self.axes, places)]
         if len(keys) == 1:  # the common case, made without zip: 1e5 cases in a few ms
             return [{keys[0]: value} for value in columns[0]]
         return [dict(zip(keys, row)) for row in zip(*columns)]
