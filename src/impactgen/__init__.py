@@ -9,10 +9,10 @@ from .compare import compare_laws
 from .engines import simulate
 from .errors import BuildError, ImpactgenError, ImpactgenWarning, SceneError, SolverError, ValidityWarning
 from .scene import Scene, load_scene, scene_from_dict
-from .sweep import sweep
+from .sweep import run_batch, sweep
 
 __version__ = "0.1.0"
 
 
 __all__ = ["BuildError", "ImpactgenError", "ImpactgenWarning", "SceneError", "SolverError", "ValidityWarning", "Scene", "load_scene",
-           "scene_from_dict", "simulate", "sweep", "compare_laws", "__version__"]
+           "scene_from_dict", "simulate", "sweep", "run_batch", "compare_laws", "__version__"]

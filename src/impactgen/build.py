@@ -55,8 +55,11 @@ MODEL_GLUE_FILES = ("model_machine.h", "model_machine_points.h", "model_machine.
 RUNTIME_FILES = ("roots.h", "stepper.h", "stepper.c", "step_cvode.c", "step_erk.c", "step_sundials.h", "step_sundials.c",
                  "step_pair.c", "step_auto.c", "dopri5.h", "dopri5.c", "small_kernels.h", "small_kernels.c")
 GLUE_FILES = MODEL_GLUE_FILES + RUNTIME_FILES
+# The batch entry (many cases in one C call: sweeps, run_batch): compiled into each model's Python
+# extension only (an FMU or the C driver has no use for it).
+BATCH_FILES = ("batch.h", "batch.c")
 RUNTIME_ARCHIVE = "impactgen_runtime"  # built as libimpactgen_runtime.a
-CDEF_HEADERS = ("model_machine.h", "stepper.h", "tally.h", "solver.h")  # the runtime's declarations cffi reads, in this order
+CDEF_HEADERS = ("model_machine.h", "stepper.h", "tally.h", "solver.h", "batch.h")  # the runtime's declarations cffi reads, in this order
 MANIFEST = "manifest.json"
 
 if TYPE_CHECKING:  # the generator (sympy) is imported only to build a model, not to load one
@@ -135,7 +138,7 @@ def build_key(spec: ModelSpec, sundials: Sundials) -> str:
     parts = {
         "spec": spec.to_json(),
         "generator": _generator_fingerprint(),
-        "glue": [hashlib.sha256(_native(f).encode()).hexdigest() for f in GLUE_FILES],
+        "glue": [hashlib.sha256(_native(f).encode()).hexdigest() for f in GLUE_FILES + BATCH_FILES],
         "flags": build_flags(),
         "compiler": _compiler(),
         "sundials": _sundials_parts(sundials),
@@ -212,14 +215,15 @@ def _compile(gen: GeneratedModel, sundials: Sundials, module_name: str, workdir:
     for name, text in gen.files().items():
         (workdir / name).write_text(text)
     runtime_headers = [name for name in RUNTIME_FILES if name.endswith(".h")]  # solver.h includes stepper.h
-    for name in (*MODEL_GLUE_FILES, *runtime_headers):
+    for name in (*MODEL_GLUE_FILES, *BATCH_FILES, *runtime_headers):
         (workdir / name).write_text(_native(name))
     ffi = cffi.FFI()
     ffi.cdef(gen.cdef + _glue_cdef())
     ffi.set_source(
         module_name,
-        '#include "model.h"\n#include "model_machine.h"\n#include "solver.h"\n',
-        sources=[str(workdir / name) for name in (*gen.files(), *MODEL_GLUE_FILES) if name.endswith(".c")],
+        '#include "model.h"\n#include "model_machine.h"\n#include "solver.h"\n#include "batch.h"\n',
+        sources=[str(workdir / name) for name in (*gen.files(), *MODEL_GLUE_FILES, *BATCH_FILES)
+                 if name.endswith(".c")],
         include_dirs=[str(workdir), *sundials.include_dirs],
         extra_objects=[str(runtime)],  # before the SUNDIALS libraries on the link line, as an archive must be
         library_dirs=list(sundials.library_dirs),

@@ -10,7 +10,8 @@ QUICK_LINKS = (2, 3, 5)
 
 
 def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
-    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep", "points") and write the report."""
+    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep", "points", "batch") and write the
+    report ("batch" is not among the default parts: a million cases take minutes)."""
     from .report import write_report
     from .rhs import rhs_benchmark
     from .scaling import scaling
@@ -33,6 +34,9 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     if "sweep" in parts:
         from .sweep import sweep_benchmark
         sweep_result = sweep_benchmark(quick)
+    if "batch" in parts:  # the sweep against the C loop, and a million cases: what the batch entry is judged by
+        from .sweep import batch_benchmark
+        sweep_result["batch"] = batch_benchmark(quick)
     points_result = {}
     if "points" in parts:
         from .points import points_benchmark

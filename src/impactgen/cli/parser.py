@@ -139,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
     bench.add_argument("--out", type=Path, default=Path("bench-results"), help="report folder")
     bench.add_argument("--parts", default="workprecision,rhs,scaling,sweep,points",
-                       help="which benchmarks, comma-separated (workprecision, rhs, scaling, sweep, points)")
+                       help="which benchmarks, comma-separated (workprecision, rhs, scaling, sweep, points; batch, not by default: a million sweep cases against the C loop, minutes)")
     bench.add_argument("--debug", action="store_true", help="show tracebacks")
 
     stab = sub.add_parser("stability", help="run the catalogue of stiff and extreme cases")

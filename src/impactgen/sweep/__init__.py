@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from ..scene import Scene, load_scene
+from .ensemble import run_batch
 from .run import check_arguments, run_sweep
 from .spec import SweepSpec
 
@@ -46,7 +47,7 @@ def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random
         Called with the number of cases each time some finish.
     trajectories : int or iterable of int, default 0
         Keep the samples of this many evenly chosen cases (or of these case numbers) in
-        ``out/trajectories/case-N.parquet``, for figures of T(t) per case.
+        ``out/_trajectories/case-N.parquet``, for figures of T(t) per case.
 
     Returns
     -------
@@ -71,4 +72,4 @@ def sweep(scene: Scene | str | Path, vary: Mapping[str, Any] | list[str], random
                      progress=progress, scheduler=scheduler, trajectories=trajectories)
 
 
-__all__ = ["SweepSpec", "run_sweep", "sweep"]
+__all__ = ["SweepSpec", "run_batch", "run_sweep", "sweep"]

@@ -34,6 +34,8 @@ IN_PROCESS_SHARES = 4  # in this process, chunks as a pool of four has them: the
 # of the cases, so that the progress bar moves and an interrupt loses little
 MAX_TASK_CHUNK = 1000  # cases per Dask task: a task costs the cluster about 5 ms (500 tasks of 200
 # cases doing nothing took 2.6 s on a LocalCluster of two workers), a pool's chunk about 0.8 ms
+TASKS_AHEAD = 4  # Dask tasks in flight per worker: the next always queued on the worker, and the
+# driver holds only their cases (a million cases made at once had taken a gigabyte)
 MAX_CHUNK_TRIES = 3  # a chunk whose workers die this often is recorded as failed
 AHEAD_PER_WORKER = 2  # chunks sent to a pool per worker at a time: the next is always waiting,
 # and a dead worker leaves only these as suspects (the pool itself holds workers + 1)
@@ -65,18 +67,23 @@ def frozen_heap() -> Iterator[None]:
         gc.unfreeze()
 
 
-def chunked(cases: Chunk, workers: int, largest: int = MAX_CHUNK) -> list[Chunk]:
-    """The cases in chunks that shrink towards the end (guided scheduling): large chunks
-    while much is left, since each costs the driver and its worker a pause, and small ones
-    last, so that the workers finish together instead of one waiting on the other's last
-    large chunk."""
-    chunks, start = [], 0
-    while start < len(cases):
-        left = len(cases) - start
+def chunk_bounds(count: int, workers: int, largest: int = MAX_CHUNK) -> list[tuple[int, int]]:
+    """(start, stop) of chunks of `count` cases that shrink towards the end (guided
+    scheduling): large chunks while much is left, since each costs the driver and its worker
+    a pause, and small ones last, so that the workers finish together instead of one waiting
+    on the other's last large chunk."""
+    bounds, start = [], 0
+    while start < count:
+        left = count - start
         size = max(SMALLEST_CHUNK, min(largest, -(-left // (GUIDED_SHARE * workers))))
-        chunks.append(cases[start:start + size])
+        bounds.append((start, min(start + size, count)))
         start += size
-    return chunks
+    return bounds
+
+
+def chunked(cases: Chunk, workers: int, largest: int = MAX_CHUNK) -> list[Chunk]:
+    """The cases in the chunks of `chunk_bounds`."""
+    return [cases[start:stop] for start, stop in chunk_bounds(len(cases), workers, largest)]
 
 
 class Lost(NamedTuple):
@@ -88,8 +95,9 @@ class Lost(NamedTuple):
 
 
 def in_process(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk) -> Iterator[Any]:
-    for chunk in chunked(todo, IN_PROCESS_SHARES):
-        yield run_chunk(payload, chunk, options)
+    """`todo` (a list of cases, or anything sliced into lists of them, as run.CaseList) here."""
+    for start, stop in chunk_bounds(len(todo), IN_PROCESS_SHARES):
+        yield run_chunk(payload, todo[start:stop], options)
 
 
 def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, todo: Chunk,
@@ -98,7 +106,10 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
     A dead worker breaks the pool, and the chunks sent to it then are suspects: they run
     again on a new pool one at a time, so that a chunk that kills its worker is told apart
     from the chunks sent with it, and it alone is tried up to MAX_CHUNK_TRIES times."""
-    queue = deque((chunk, 0) for chunk in chunked(todo, workers))  # (chunk, the pools it broke with)
+    # (chunk, the pools it broke with): a chunk is a (start, stop) of `todo` until sent, its
+    # cases made then, so that the driver holds the cases of the chunks in flight only
+    queue: deque[tuple[Chunk | tuple[int, int], int]] = deque((bounds, 0)
+                                                              for bounds in chunk_bounds(len(todo), workers))
     while queue:
         context = _start_method()
         inherited = tuple(NOT_FOR_WORKERS) if context.get_start_method() == "fork" else ()
@@ -110,6 +121,8 @@ def process_pool(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
             while (queue or pending) and not broken:
                 while queue and _may_send(queue[0][1], pending.values(), AHEAD_PER_WORKER * workers):
                     chunk, tries = queue.popleft()
+                    if isinstance(chunk, tuple):
+                        chunk = todo[chunk[0]:chunk[1]]
                     pending[pool.submit(run_chunk, payload, chunk, options)] = (chunk, tries)
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for future in done:
@@ -230,14 +243,31 @@ def dask_cluster(run_chunk: RunChunk, payload: dict[str, Any], options: Any, tod
         raise SceneError("--scheduler", f"cannot reach the Dask scheduler at {excerpt(scheduler)}: {exc}") from None
     try:
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        chunks = chunked(todo, n_workers, MAX_TASK_CHUNK)
-        futures = {client.submit(run_chunk, payload, chunk, options, pure=False): chunk for chunk in chunks}
+        bounds = iter(chunk_bounds(len(todo), n_workers, MAX_TASK_CHUNK))
+        futures: dict[Any, Chunk] = {}
+
+        def submit() -> Any:  # the next chunk as a task, its cases made now (None: none left)
+            start_stop = next(bounds, None)
+            if start_stop is None:
+                return None
+            chunk = todo[start_stop[0]:start_stop[1]]
+            future = client.submit(run_chunk, payload, chunk, options, pure=False)
+            futures[future] = chunk
+            return future
+
+        # TASKS_AHEAD tasks per worker at a time: the driver holds the cases of those only
+        first = [f for f in (submit() for _ in range(TASKS_AHEAD * n_workers)) if f is not None]
+        finished = as_completed(first)
         try:
-            for future in as_completed(futures):
+            for future in finished:
+                chunk = futures.pop(future)
+                following = submit()
+                if following is not None:
+                    finished.add(following)
                 try:
                     yield future.result()
                 except KilledWorker:
-                    yield Lost(futures[future], "the Dask workers running it died repeatedly")
+                    yield Lost(chunk, "the Dask workers running it died repeatedly")
         finally:
             client.cancel(list(futures))
     finally:

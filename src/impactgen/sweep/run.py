@@ -7,10 +7,13 @@ command resumes, computing only the missing cases. Two sweeps into one folder ar
 """
 from __future__ import annotations
 
+import collections
+import contextlib
 import fcntl
 import itertools
 import json
 import os
+import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,11 +22,11 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 
 from ..engines import simulate
-from ..errors import ImpactgenError, SceneError, excerpt, warn
+from ..errors import ImpactgenError, SceneError, ValidityWarning, excerpt, warn
 from ..export import trajectory_columns, write_parquet, write_table
 from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
-from . import execute
+from . import batch, execute
 from .spec import SweepSpec
 
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
@@ -32,6 +35,7 @@ RESULT_FILE = "sweep.parquet"
 # (pandas.read_parquet, pyarrow.dataset, dask.dataframe): the folder reads as one dataset,
 # each case once.
 PARTS, STAMP, TRAJECTORIES, FIGURES = "_parts", "_sweep.json", "_trajectories", "_figures"
+LOCK = ".lock"  # held while a sweep writes into the folder, removed when it finishes
 OLD_NAMES = {"parts": PARTS, "sweep.json": STAMP, "trajectories": TRAJECTORIES, "figures": FIGURES}  # before 0.2
 
 Progress = Callable[[int], None]  # called with the number of cases just finished
@@ -168,6 +172,7 @@ class ChunkColumns:
         self.warnings: list[str] = []
         self.wall_s: list[float] = []
         self.trajectories: dict[int, dict[str, tuple[np.ndarray, str]]] = {}
+        self.batch: batch.BatchRows | None = None  # every case's row, from one C call (instead of `add`)
 
     def add(self, summary: tuple[Record, int] | None, status: str, message: str, warnings: str,
             wall_s: float) -> None:
@@ -184,6 +189,11 @@ class ChunkColumns:
         keys = dict.fromkeys(key for _, overrides in self.cases for key in overrides)
         columns = {"case": _packed([index for index, _ in self.cases])}
         columns.update({key: _packed([overrides.get(key) for _, overrides in self.cases]) for key in keys})
+        ran = self.batch
+        if ran is not None:
+            n = len(self.cases)
+            columns.update(status=["ok"] * n, message=[""] * n, warnings=[""] * n, wall_s=ran.wall_s)
+            return ChunkRows({**columns, **_record_columns(ran.records, ran.links)}, self.trajectories)
         columns.update(status=self.status, message=self.message, warnings=self.warnings,
                        wall_s=np.array(self.wall_s, dtype=float))
         return ChunkRows({**columns, **summary_columns(self.summaries)}, self.trajectories)
@@ -217,12 +227,40 @@ def _packed(values: list[Any]) -> np.ndarray | list[Any]:
 
 
 def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOptions) -> ChunkRows:
-    """The rows of some cases of one scene (what a worker process or Dask task runs)."""
+    """The rows of some cases of one scene (what a worker process or Dask task runs): in one C
+    call (batch.py) those it can take, the others case by case through `simulate`."""
     base = scene_from_dict(scene_dict)
     out = ChunkColumns(cases)
-    for index, overrides in cases:
-        run_case(out, base, index, overrides, index in options.keep_trajectories)
+    ran = _batched(base, cases, options)
+    if ran is None:
+        for index, overrides in cases:
+            run_case(out, base, index, overrides, index in options.keep_trajectories)
+        return out.rows()
+    if not ran.again.any():  # the common chunk: every case in C
+        out.batch = ran
+        return out.rows()
+    record = ran.records.dtype
+    for k, (index, overrides) in enumerate(cases):
+        if ran.again[k]:
+            run_case(out, base, index, overrides, index in options.keep_trajectories)
+        else:
+            out.add(((ran.records[k].tobytes(), record), base.n), "ok", "", "", ran.wall_s[k])
     return out.rows()
+
+
+def _batched(base: Scene, cases: execute.Chunk, options: CaseOptions) -> batch.BatchRows | None:
+    """The chunk's cases run in one C call (batch.run_plan), or None when the batch cannot take
+    them: cases that vary different keys, or keys that are no model parameter nor initial element."""
+    keys = tuple(cases[0][1]) if cases else ()
+    if not keys or any(tuple(overrides) != keys for _, overrides in cases):
+        return None
+    plan = batch.plan_for(base, keys)
+    if plan is None:
+        return None
+    values, usable = batch.case_values(keys, [overrides for _, overrides in cases])
+    if options.keep_trajectories:
+        usable &= np.array([index not in options.keep_trajectories for index, _ in cases])
+    return batch.run_plan(plan, values, usable)
 
 
 def evenly_chosen(count: int, total: int) -> frozenset[int]:
@@ -232,18 +270,29 @@ def evenly_chosen(count: int, total: int) -> frozenset[int]:
     return frozenset(int(i) for i in np.unique(np.linspace(0, total - 1, min(count, total)).round()))
 
 
-def structure_order(spec: SweepSpec, cases: list[dict[str, Any]]) -> list[int]:
-    """Case indices with the cases of one model structure together (links, contact model,
-    friction on or off and its kind), so a worker loads each compiled model once."""
-    structural = [a.key for a in spec.axes if a.key.split("[")[0] in
-                  ("chain.links", "contact.model", "contact.friction", "contact.friction_mode",
-                   "solver.t_end", "solver.jacobian", "solver.method")]
-    if not structural:
-        return list(range(len(cases)))
+STRUCTURAL = ("chain.links", "contact.model", "contact.friction", "contact.friction_mode", "solver.t_end",
+              "solver.jacobian", "solver.method")  # keys whose values may choose another compiled model
 
-    def key(i: int) -> tuple:
-        return tuple(repr(cases[i][k] if k != "contact.friction" else cases[i][k] > 0) for k in structural)
-    return sorted(range(len(cases)), key=key)
+
+def structural_keys(spec: SweepSpec) -> list[str]:
+    return [a.key for a in spec.axes if a.key.split("[")[0] in STRUCTURAL]
+
+
+def structure_order(spec: SweepSpec) -> np.ndarray:
+    """Case indices with the cases of one model structure together (links, contact model,
+    friction on or off and its kind), so a worker loads each compiled model once; made from
+    the structural keys' columns alone (a million cases are never made at once for it)."""
+    structural = structural_keys(spec)
+    codes = []
+    for key in reversed(structural):  # np.lexsort sorts by its last key first
+        column = spec.column(key)
+        if key == "contact.friction":  # on or off: the friction's size is no structure
+            codes.append(column > 0 if isinstance(column, np.ndarray) else np.array([v > 0 for v in column]))
+            continue
+        codes.append(np.unique(np.array([repr(v) for v in column], dtype=object), return_inverse=True)[1])
+    if not codes:
+        return np.arange(spec.count(), dtype=np.int64)
+    return np.lexsort(codes).astype(np.int64)  # stable: case order within a structure
 
 
 class OutputFolder:
@@ -255,7 +304,7 @@ class OutputFolder:
         self.meta = {"impactgen.scene": scene.to_toml(), "impactgen.sweep": spec.describe()}
         try:
             path.mkdir(parents=True, exist_ok=True)
-            self._lock = open(path / ".lock", "w")
+            self._lock = open(path / LOCK, "w")
         except OSError as exc:
             raise SceneError("--out", f"cannot use the folder {path}: {exc}") from None
         try:  # a lock on the open file: it ends with the last process holding it (none is a worker)
@@ -303,6 +352,11 @@ class OutputFolder:
         _write_dataset_metadata(path)
         return path
 
+    def finish(self) -> None:
+        """The sweep is complete: its lock file goes (the lock itself is held until `close`)."""
+        with contextlib.suppress(OSError):
+            (self.path / LOCK).unlink()
+
     def close(self) -> None:
         execute.NOT_FOR_WORKERS.discard(self._lock.fileno())
         fcntl.flock(self._lock, fcntl.LOCK_UN)
@@ -336,7 +390,7 @@ def run_sweep(scene: Scene, spec: SweepSpec, workers: int | None = None, out: Pa
     `scheduler` runs the chunks on a Dask cluster (an address, or "local"); otherwise a local
     pool of `workers` processes (default: every usable core) runs them. `trajectories` keeps
     the samples of that many evenly chosen cases (or of the listed case numbers) in
-    `out/trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
+    `out/_trajectories/case-N.parquet`. `on_resume` hears how many cases an earlier run
     into `out` had finished (they are not run again). Every argument is checked before any
     case runs; workers beyond `worker_limit` are not started, and a warning says so.
     """
@@ -402,11 +456,52 @@ def capped_workers(asked: int | None, cases: int) -> int:
     return int(asked)
 
 
+class CaseList:
+    """The cases still to run, in the order they go out, made a chunk at a time when sliced
+    (as execute's backends slice it): the driver never holds every case of a large sweep."""
+
+    def __init__(self, spec: SweepSpec, indices: np.ndarray):
+        self.spec, self.indices = spec, indices
+
+    def __len__(self) -> int:
+        return len(self.indices)
+
+    def __getitem__(self, part: slice) -> execute.Chunk:
+        chosen = self.indices[part]
+        ascending = np.sort(chosen)  # cases_at takes them in case order
+        made = dict(zip(ascending.tolist(), self.spec.cases_at(ascending)))
+        return [(i, made[i]) for i in chosen.tolist()]
+
+
+def _todo(spec: SweepSpec, finished: set[int]) -> CaseList:
+    """The cases not finished, with the cases of one model structure together
+    (`structure_order`: in case order when no key of the structure varies)."""
+    order = structure_order(spec)
+    if finished:
+        order = order[~np.isin(order, np.fromiter(finished, dtype=np.int64, count=len(finished)))]
+    return CaseList(spec, order)
+
+
+def _warn_validity(frame) -> None:
+    """One ValidityWarning for the sweep when some of its cases have validity warnings: how
+    many, and the most common kind (a case's first warning, its numbers left out)."""
+    warned = [text for text in frame["warnings"] if isinstance(text, str) and text]
+    if not warned:
+        return
+    kinds = collections.Counter(NUMBERS.sub("#", text.split(" | ")[0]) for text in warned)
+    kind, count = kinds.most_common(1)[0]
+    example = next(text.split(" | ")[0] for text in warned if NUMBERS.sub("#", text.split(" | ")[0]) == kind)
+    warn(f"{len(warned)} of {len(frame)} cases have validity warnings (the table's `warnings` column); the most "
+         f"common, in {count}: {example}", ValidityWarning)
+
+
+NUMBERS = re.compile(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?")  # the numbers in a warning's text
+
+
 def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, progress: Progress | None,
          scheduler: str | None, trajectories: int | Iterable[int], on_resume: Callable[[int], None] | None):
-    cases = spec.cases()
-    spec.check(scene, cases)
-    keep = _kept_cases(trajectories, len(cases))
+    spec.check(scene)
+    keep = _kept_cases(trajectories, spec.count())
     if keep and out is None:
         raise SceneError("--trajectories", "kept trajectories are written into the --out folder: give one")
     folder = OutputFolder(out, scene, spec) if out is not None else None
@@ -417,20 +512,25 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
             on_resume(len(finished))
         if progress and finished:
             progress(len(finished))
-        todo = [(i, cases[i]) for i in structure_order(spec, cases) if i not in finished]
-        parts: list[ChunkRows] = []  # every new row, made a DataFrame once at the end
+        todo = _todo(spec, finished)
+        rows = Gathered(len(todo))  # every new row, made a DataFrame once at the end
         for done in _execute(scene, todo, CaseOptions(keep), workers, scheduler):
             chunk = done if isinstance(done, ChunkRows) else lost_rows(done)
             if folder:
                 for case, kept in chunk.trajectories.items():
                     folder.write_trajectory(case, kept)
                 folder.write_part(chunk)
-            parts.append(chunk)
+            rows.add(chunk)
+            n_new = len(chunk)
+            del chunk, done
             if progress:
-                progress(len(chunk))
-        frame = _table(frames, ChunkRows.joined(parts) if parts else None, spec)
+                progress(n_new)
+        frame = _table(frames, rows.columns() if rows.filled else None, spec)
+        del rows, frames
         if folder:
             folder.write_result(frame)
+            folder.finish()
+        _warn_validity(frame)
         return frame
     finally:
         if folder:
@@ -438,6 +538,56 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
 
 
 ROW_END = ("status", "message", "warnings", "wall_s")  # the last columns of the table
+
+
+class Gathered:
+    """A sweep's new rows as its chunks come, each column gathered into one array (or list) of
+    the sweep's size, allocated at its first chunk: the driver holds each value once, not once
+    per chunk and again joined (a million cases had taken over a gigabyte). A column a chunk
+    lacks is NaN there (None for text); counts that meet a NaN or a float become floats."""
+
+    def __init__(self, total: int):
+        self.total, self.filled = total, 0
+        self._columns: dict[str, np.ndarray | list[Any]] = {}
+
+    def add(self, chunk: ChunkRows) -> None:
+        n, at = len(chunk), self.filled
+        for name, column in chunk.columns.items():
+            target = self._columns.get(name)
+            if target is None:
+                target = self._columns[name] = self._empty(column, at)
+            if isinstance(target, np.ndarray) and not (isinstance(column, np.ndarray) and
+                                                       np.can_cast(column.dtype, target.dtype, "same_kind")):
+                target = self._columns[name] = self._widened(target, column)
+            target[at:at + n] = column
+        for name, target in self._columns.items():
+            if name not in chunk.columns and isinstance(target, np.ndarray):
+                if target.dtype.kind != "f":
+                    target = self._columns[name] = target.astype(float)
+                target[at:at + n] = np.nan
+        self.filled += n
+
+    def _empty(self, column: np.ndarray | list[Any], missing: int) -> np.ndarray | list[Any]:
+        """A column of the sweep's size for `column`'s values; its first `missing` rows lack it."""
+        if isinstance(column, np.ndarray) and column.dtype.kind in "iuf":
+            if column.dtype.kind == "f" or missing:
+                return np.full(self.total, np.nan)
+            return np.zeros(self.total, column.dtype)
+        return [None] * self.total
+
+    def _widened(self, target: np.ndarray, column: np.ndarray | list[Any]) -> np.ndarray | list[Any]:
+        """`target` made able to hold `column` too: floats, or a list when it is not numbers."""
+        if isinstance(column, np.ndarray) and column.dtype.kind in "iuf":
+            return target.astype(float)
+        return target[:self.filled].tolist() + [None] * (self.total - self.filled)
+
+    def columns(self) -> dict[str, np.ndarray | list[Any]]:
+        """The columns of the rows gathered, in the order they came (handed over: emptied here)."""
+        out = {}
+        for name in list(self._columns):
+            column = self._columns.pop(name)
+            out[name] = column[:self.filled] if self.filled < self.total else column
+        return out
 
 
 def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec: SweepSpec):
@@ -449,11 +599,12 @@ def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec
     import pandas as pd
     if columns is not None and not frames:
         case = np.asarray(columns["case"])
-        if (np.diff(case) > 0).all():  # in order already, each case once (the parts joined in order)
-            return pd.DataFrame({name: columns[name] for name in _column_order(columns, spec)})
-        order = np.argsort(case, kind="stable")
-        if not (np.diff(case[order]) == 0).any():
-            return pd.DataFrame({name: _taken(columns[name], order) for name in _column_order(columns, spec)})
+        order = None if (np.diff(case) > 0).all() else np.argsort(case, kind="stable")
+        if order is None or not (np.diff(case[order]) == 0).any():  # each case once
+            for name in list(columns) if order is not None else ():  # one column at a time: one more in memory
+                columns[name] = _taken(columns[name], order)
+            # copy=False: pandas keeps the arrays as they are (one block each), not joined into a copy
+            return pd.DataFrame({name: columns[name] for name in _column_order(columns, spec)}, copy=False)
     if columns is not None:
         frames = [*frames, pd.DataFrame(columns)]
     if not frames:
@@ -464,9 +615,13 @@ def _table(frames: list, columns: dict[str, np.ndarray | list[Any]] | None, spec
 
 
 def _column_order(names: Iterable[str], spec: SweepSpec) -> list[str]:
+    return column_order(names, [a.key for a in spec.axes])
+
+
+def column_order(names: Iterable[str], keys: Iterable[str]) -> list[str]:
     """case, the varied keys, the other columns as they come, then ROW_END."""
     names = list(names)
-    front = ["case", *(a.key for a in spec.axes)]
+    front = ["case", *keys]
     middle = [c for c in names if c not in front and c not in ROW_END]
     return front + middle + [c for c in ROW_END if c in names]
 

@@ -13,9 +13,8 @@ make a full grid; with `random` the cases are drawn instead, each key from its d
 """
 from __future__ import annotations
 
-import itertools
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
@@ -27,6 +26,7 @@ GRIDS = ("linspace", "logspace")
 DISTRIBUTIONS = ("uniform", "normal", "lognormal")
 CALL = re.compile(r"^\s*(?P<name>[a-z]+)\s*\((?P<args>[^()]*)\)\s*$")
 MAX_CASES = 10_000_000  # a sweep larger than this is a typo, not a study
+DRAW_BLOCK = 100_000  # random cases drawn at a time (each axis's draws of a block: 0.8 MB)
 
 
 @dataclass(frozen=True)
@@ -43,15 +43,21 @@ class Axis:
             return f"{self.key}={self.distribution}({', '.join(f'{p:g}' for p in self.parameters)})"
         return f"{self.key}={list(self.values)}"
 
-    def draw(self, rng: np.random.Generator, count: int) -> list[Any]:
+    def draw(self, rng: np.random.Generator, count: int) -> np.ndarray:
+        """`count` draws: the values of a distribution, or the positions in `values` of a
+        list's (drawn uniformly)."""
         if self.distribution == "uniform":
             lo, hi = self.parameters
-            return rng.uniform(lo, hi, count).tolist()
+            return rng.uniform(lo, hi, count)
         if self.distribution == "normal":
-            return rng.normal(*self.parameters, count).tolist()
+            return rng.normal(*self.parameters, count)
         if self.distribution == "lognormal":
-            return rng.lognormal(*self.parameters, count).tolist()
-        return [self.values[i] for i in rng.integers(0, len(self.values), count)]
+            return rng.lognormal(*self.parameters, count)
+        return rng.integers(0, len(self.values), count)
+
+    def taken(self, drawn: np.ndarray) -> list[Any]:
+        """Drawn values (`draw`) as the cases hold them: floats, or the list's values."""
+        return drawn.tolist() if self.distribution else [self.values[i] for i in drawn.tolist()]
 
 
 def parse_axis(text: str) -> Axis:
@@ -119,6 +125,7 @@ class SweepSpec:
     axes: tuple[Axis, ...]
     random: int = 0  # 0: the full grid; N: N random draws
     seed: int = 0
+    _drawn: dict[int, list[np.ndarray]] = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     @classmethod
     def from_vary(cls, vary: Mapping[str, Any] | list[str], random: int = 0, seed: int = 0) -> "SweepSpec":
@@ -161,32 +168,86 @@ class SweepSpec:
 
     def cases(self) -> list[dict[str, Any]]:
         """Every case as overrides {KEY: value}, in a fixed order (case i is row i)."""
-        if self.random:
-            rng = np.random.default_rng(self.seed)
-            columns = [a.draw(rng, self.random) for a in self.axes]
-            return [dict(zip((a.key for a in self.axes), row)) for row in zip(*columns)]
-        keys = [a.key for a in self.axes]
-        if len(keys) == 1:  # the common case, made without the product: 1e5 cases in a few ms
-            return [{keys[0]: value} for value in self.axes[0].values]
-        return [dict(zip(keys, row)) for row in itertools.product(*(a.values for a in self.axes))]
+        return self.cases_at(np.arange(self.count()))
 
-    def check(self, scene: Scene, cases: list[dict[str, Any]]) -> None:
+    def cases_at(self, indices: np.ndarray) -> list[dict[str, Any]]:
+        """Cases `indices` (ascending) as overrides {KEY: value}: made when asked for, so that a
+        sweep holds the cases of its chunks in flight only, never all of them."""
+        keys = [a.key for a in self.axes]
+        indices = np.asarray(indices, dtype=np.int64)
+        if self.random:
+            columns: list[list[Any]] = [[] for _ in self.axes]
+            blocks = indices // DRAW_BLOCK
+            for block in np.unique(blocks):
+                drawn = self._block(int(block))
+                rows = indices[blocks == block] - block * DRAW_BLOCK
+                for column, axis, values in zip(columns, self.axes, drawn):
+                    column.extend(axis.taken(values[rows]))
+        else:
+            places = np.unravel_index(indices, [len(a.values) for a in self.axes])  # itertools.product's order
+            columns = [[a.values[i] for i in place.tolist()] for a, place in zip(self.axes, places)]
+        if len(keys) == 1:  # the common case, made without zip: 1e5 cases in a few ms
+            return [{keys[0]: value} for value in columns[0]]
+        return [dict(zip(keys, row)) for row in zip(*columns)]
+
+    def column(self, key: str) -> list[Any] | np.ndarray:
+        """Every case's value of `key`, in case order (made a block of draws at a time; an
+        array of a distribution's draws)."""
+        axis = next(k for k, a in enumerate(self.axes) if a.key == key)
+        if not self.random:
+            places = np.unravel_index(np.arange(self.count()), [len(a.values) for a in self.axes])[axis]
+            return [self.axes[axis].values[i] for i in places.tolist()]
+        blocks = [self._block(block)[axis] for block in range(-(-self.random // DRAW_BLOCK))]
+        if self.axes[axis].distribution:
+            return np.concatenate(blocks)
+        return [value for drawn in blocks for value in self.axes[axis].taken(drawn)]
+
+    def _block(self, block: int) -> list[np.ndarray]:
+        """The draws of cases block * DRAW_BLOCK onwards, each axis's in turn: the first block
+        from the seed alone (a sweep of up to DRAW_BLOCK cases draws as it always did), each
+        other from (seed, block), so that any block is made without the ones before it."""
+        cached = self._drawn.get(block)
+        if cached is None:
+            rng = np.random.default_rng(self.seed if block == 0 else [self.seed, block])
+            count = min(DRAW_BLOCK, self.random - block * DRAW_BLOCK)
+            cached = [a.draw(rng, count) for a in self.axes]
+            self._drawn.clear()  # one block kept: the chunks go through the blocks in order
+            self._drawn[block] = cached
+        return cached
+
+    def check(self, scene: Scene) -> None:
         """Refuse, naming the key, an index out of range for `scene` and any value that no
         scene could take (a negative mass, a word for a number, a drawn Poisson ratio of 0.7).
-        Values that are bad only together (a yield strength above the modulus) become rows."""
+        Values that are bad only together (a yield strength above the modulus) become rows.
+        Drawn numbers are checked by their smallest and largest in each block of draws (a
+        key's own check is a range); the values of a list or grid are checked as listed."""
         links_vary = any(a.key == "chain.links" for a in self.axes)
+        first = self.cases_at(np.arange(min(1, self.count())))
+        blocks = -(-self.random // DRAW_BLOCK)
+        ranges = [(np.inf, -np.inf)] * len(self.axes)  # each drawn axis's smallest and largest
+        for block in range(blocks):
+            drawn = self._block(block)
+            ranges = [(min(lo, d.min().item()), max(hi, d.max().item())) if a.distribution else (lo, hi)
+                      for (lo, hi), d, a in zip(ranges, drawn, self.axes)]
         for axis in self.axes:
             try:  # the key (and its index) fits this scene
-                scene.replace({axis.key: cases[0][axis.key]} if cases else {})
+                scene.replace({axis.key: first[0][axis.key]} if first else {})
             except SceneError as exc:
                 if exc.key == axis.key:
                     raise
                 # another key named: a combination with the scene's other values, left to the rows
-            values = [c[axis.key] for c in cases] if self.random else axis.values
-            if links_vary and isinstance(values[0], list):
+            if links_vary and isinstance(axis.values[0] if axis.values else None, list):
                 continue  # a per-link list is checked against its case's own link count
             try:
-                check_values(axis.key, values, scene.n)
+                if not axis.distribution:
+                    check_values(axis.key, axis.values, scene.n)
+                    continue
+                low, high = ranges[self.axes.index(axis)]
+                try:
+                    check_values(axis.key, [low, high], scene.n)
+                except SceneError:  # the first value refused, in case order
+                    for block in range(blocks):
+                        check_values(axis.key, self._block(block)[self.axes.index(axis)].tolist(), scene.n)
             except SceneError as exc:
                 drawn = " (drawn from the distribution: narrow it or choose another)" if axis.distribution else ""
                 raise SceneError(exc.key, str(exc).split(": ", 1)[-1] + drawn) from None

@@ -1,0 +1,121 @@
+"""The batch entry (native/batch.c, sweep/batch.py): a chunk's cases run in one C call give the
+rows the per-case path gives, bit for bit; run_batch; what a finished sweep leaves behind."""
+import numpy as np
+import pytest
+
+import impactgen
+from impactgen.errors import SceneError, ValidityWarning
+from impactgen.sweep import batch
+from impactgen.sweep.run import CaseOptions, ChunkColumns, run_case, run_chunk
+
+CASES = 2000
+
+
+def _random_cases(count: int, seed: int) -> list[tuple[int, dict]]:
+    """The paper's inputs drawn wide: some cases fail (too few steps allowed, below), some are
+    refused by the scene (a yield strength above the modulus, a joint starting inside the
+    surface), some need the model with joint 1's contact (a first link near level)."""
+    rng = np.random.default_rng(seed)
+    level = rng.random(count) < 0.05  # the first link near level: joint 1 may reach the surface
+    upward = rng.random(count) < 0.05  # the second link rising: joint 1 starts inside the surface
+    columns = {
+        "initial.q_deg[1]": np.where(level, rng.uniform(-8, -2, count), rng.uniform(-80, -60, count)),
+        "initial.q_deg[2]": np.where(upward, rng.uniform(1, 5, count), rng.uniform(-70, -50, count)),
+        "initial.u[1]": rng.uniform(-0.3, -0.05, count),
+        "initial.u[2]": rng.uniform(-0.5, -0.1, count),
+        "rod.yield_strength": rng.choice([1.12e9, 1.0e9, 3e11], count, p=[0.5, 0.45, 0.05]),
+    }
+    return [(i, {key: float(values[i]) for key, values in columns.items()}) for i in range(count)]
+
+
+def _same(a: dict, b: dict) -> None:
+    assert set(a) == set(b)
+    for name in a:
+        if name == "wall_s":
+            continue
+        x, y = a[name], b[name]
+        if isinstance(x, np.ndarray) and x.dtype.kind == "f":
+            assert np.array_equal(x.view(np.int64), np.asarray(y, dtype=float).view(np.int64)), name
+        else:
+            assert list(x) == list(y), name
+
+
+def test_a_batch_gives_the_per_case_rows_bit_for_bit():
+    base = impactgen.load_scene("paper", overrides={"solver.max_steps": 160})
+    cases = _random_cases(CASES, 48)
+    batched = run_chunk(base.to_dict(), cases, CaseOptions())
+    one_by_one = ChunkColumns(cases)
+    for index, overrides in cases:
+        run_case(one_by_one, base, index, overrides)
+    _same(batched.columns, one_by_one.rows().columns)
+    status = list(batched.columns["status"])
+    assert {"ok", "failed", "invalid"} <= set(status), set(status)
+    # the cases the batch handed to the per-case path are few, and include those of another model
+    plan = batch.plan_for(base, tuple(cases[0][1]))
+    values, usable = batch.case_values(plan.keys, [o for _, o in cases])
+    ran = batch.run_plan(plan, values, usable)
+    assert ran.again.sum() < CASES / 2 and ran.again.any()
+    joint_model = [k for k, (_, o) in enumerate(cases) if _model_joints(base, o) not in (None, ())]
+    assert joint_model and all(ran.again[k] for k in joint_model)
+
+
+def _model_joints(base, overrides):
+    """The joints with contact code in the model a case needs (None: the scene refuses it)."""
+    from impactgen.engines import model_spec
+    from impactgen.scene import scene_with
+    try:
+        return model_spec(scene_with(base, overrides)).joints
+    except SceneError:
+        return None
+
+
+def test_run_batch_takes_a_table_and_gives_the_sweep_s_columns():
+    pd = pytest.importorskip("pandas")
+    cases = pd.DataFrame({"initial.u[2]": [-0.2, -0.4, -0.3], "rod.yield_strength": [1.1e9, 1.2e9, 5e11]})
+    table = impactgen.run_batch("paper", cases)
+    swept = impactgen.sweep("paper", vary={"initial.u[2]": [-0.2, -0.4]}, workers=1)
+    assert list(table["case"]) == [0, 1, 2] and list(table["status"]) == ["ok", "ok", "invalid"]
+    assert set(swept.columns) - {"initial.u[2]"} <= set(table.columns)
+    single = impactgen.simulate(impactgen.load_scene("paper", overrides={"initial.u[2]": -0.4,
+                                                                         "rod.yield_strength": 1.2e9}))
+    assert table["delta_r"][1] == single.summary["delta_r"]
+    again = impactgen.run_batch("paper", {key: cases[key].tolist() for key in cases})
+    assert again["delta_r"][:2].tolist() == table["delta_r"][:2].tolist()
+
+
+@pytest.mark.parametrize("cases, key", [
+    ([1, 2], "cases"),
+    ({"initial.nonsense": [1.0]}, "initial.nonsense"),
+    ({"initial.u[2]": [-0.1, -0.2], "rod.E": [2e11]}, "cases"),
+    ({"initial.u[2]": -0.1}, "initial.u[2]"),
+])
+def test_run_batch_refuses_what_is_no_table_of_cases(cases, key):
+    with pytest.raises(SceneError) as caught:
+        impactgen.run_batch("paper", cases)
+    assert caught.value.key == key
+
+
+def test_a_finished_sweep_leaves_no_lock_file(tmp_path):
+    impactgen.sweep("paper", vary={"initial.u[2]": [-0.2, -0.3]}, workers=1, out=tmp_path / "run")
+    assert not (tmp_path / "run" / ".lock").exists()
+    assert (tmp_path / "run" / "sweep.parquet").exists()
+
+
+def test_a_sweep_s_validity_warnings_are_one_python_warning():
+    """Gentle impacts (the elastic limit never reached) in some cases: one ValidityWarning
+    that counts them, whatever their number."""
+    with pytest.warns(ValidityWarning) as caught:
+        table = impactgen.sweep("paper", vary={"initial.u[1]": [0.0], "initial.u[2]": [-0.3, -1e-3, -1e-2]},
+                                workers=1)
+    warned = int((table["warnings"] != "").sum())
+    validity = [w for w in caught if issubclass(w.category, ValidityWarning)]
+    assert len(validity) == 1 and warned >= 1
+    assert str(validity[0].message).startswith(f"{warned} of 3 cases")
+
+
+def test_run_batch_s_docstring_example_runs():
+    import doctest
+    import importlib
+    module = importlib.import_module("impactgen.sweep.ensemble")  # (impactgen.sweep is the function)
+    failures, tried = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert tried > 0 and failures == 0
