@@ -101,12 +101,14 @@ def test_a_finished_sweep_leaves_no_lock_file(tmp_path):
     assert (tmp_path / "run" / "sweep.parquet").exists()
 
 
-def test_a_sweep_s_validity_warnings_are_one_python_warning():
+@pytest.mark.parametrize("kept", [0, 3], ids=["in C", "per case, trajectories kept"])
+def test_a_sweep_s_validity_warnings_are_one_python_warning(kept, tmp_path):
     """Gentle impacts (the elastic limit never reached) in some cases: one ValidityWarning
-    that counts them, whatever their number."""
+    that counts them, whatever their number, whether the cases ran in C or one by one
+    through simulate (which then must not warn per case)."""
     with pytest.warns(ValidityWarning) as caught:
         table = impactgen.sweep("paper", vary={"initial.u[1]": [0.0], "initial.u[2]": [-0.3, -1e-3, -1e-2]},
-                                workers=1)
+                                workers=1, trajectories=kept, out=tmp_path / "sweep" if kept else None)
     warned = int((table["warnings"] != "").sum())
     validity = [w for w in caught if issubclass(w.category, ValidityWarning)]
     assert len(validity) == 1 and warned >= 1
