@@ -6,7 +6,7 @@ import pytest
 import impactgen
 from impactgen.errors import SceneError, ValidityWarning
 from impactgen.sweep import batch
-from impactgen.sweep.run import CaseOptions, ChunkColumns, run_case, run_chunk
+from impactgen.sweep.chunk import CaseOptions, ChunkColumns, run_case, run_chunk
 
 CASES = 2000
 

@@ -256,9 +256,9 @@ BAD_SWEEP_ARGUMENTS = {  # what a hostile caller passed, and the argument the on
 
 @pytest.mark.parametrize("call", list(BAD_SWEEP_ARGUMENTS))
 def test_a_bad_sweep_argument_is_refused_before_any_case_runs(call, monkeypatch):
-    from impactgen.sweep import run as sweep_run
+    from impactgen.sweep import chunk as sweep_chunk
     ran = []
-    monkeypatch.setattr(sweep_run, "simulate", lambda *a, **k: ran.append(1))  # no case may start
+    monkeypatch.setattr(sweep_chunk, "simulate", lambda *a, **k: ran.append(1))  # no case may start
     arguments, key = BAD_SWEEP_ARGUMENTS[call]
     arguments = {"random": 2, **arguments}
     with pytest.raises(SceneError) as caught:

@@ -63,7 +63,7 @@ def _flattened(summary: dict) -> dict:
 def test_a_chunk_s_summary_columns_are_the_summaries_of_its_cases():
     """Columns made at once from the tallied summaries of a chunk's cases: named and valued as
     each case's `summary`, NaN for a refused case and beyond a case's own link count."""
-    from impactgen.sweep.run import ChunkRows, CaseOptions, run_chunk
+    from impactgen.sweep.chunk import ChunkRows, CaseOptions, run_chunk
     cases = [{"initial.u[2]": -0.3},
              {"chain.links": 3, "chain.length": 0.7, "chain.mass": 1.0, "initial.q_deg": [-70, -60, -60],
               "initial.u": [-0.1, -0.2, -0.2]},
@@ -92,7 +92,7 @@ def test_a_chunk_s_summary_columns_are_the_summaries_of_its_cases():
 def test_a_chunk_of_two_models_keeps_its_counts_integers():
     """Counts stay integers when every case of a chunk has them, whatever models the cases
     ran on (a chunk of a sweep over chain.links), as in a chunk of one model."""
-    from impactgen.sweep.run import CaseOptions, run_chunk
+    from impactgen.sweep.chunk import CaseOptions, run_chunk
     cases = [{"initial.u[2]": -0.3},
              {"chain.links": 3, "chain.length": 0.7, "chain.mass": 1.0, "initial.q_deg": [-70, -60, -60],
               "initial.u": [-0.1, -0.2, -0.2]}]

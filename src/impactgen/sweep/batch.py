@@ -6,7 +6,7 @@ parameter-table key, e.g. ``rod.yield_strength``, ``chain.length[1]``) and the i
 (``initial.q[i]``, ``initial.q_deg[i]``, ``initial.u[i]``), by real numbers. The C loop fills
 each case's parameters from the base scene's, checks and derives them (model_derive), runs it
 through the one driver (ig_run_begin, ig_run) and writes its summary. Every case whose row the
-batch cannot give exactly as `simulate` would is run again on the per-case path (run.run_case):
+batch cannot give exactly as `simulate` would is run again on the per-case path (chunk.run_case):
 values the C checks refuse (the scene's message is the row's), a start the scene checks may
 refuse, values that need another model's contact points, a failure (its message), a run that
 ends without separating, and a case whose validity warnings may not be empty. Those are rare in

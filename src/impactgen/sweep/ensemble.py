@@ -9,7 +9,8 @@ import numpy as np
 from ..errors import SceneError, excerpt
 from ..scene import Scene, load_scene, split_key
 from .execute import MAX_CHUNK
-from .run import CaseOptions, ChunkRows, column_order, run_chunk
+from .chunk import CaseOptions, ChunkRows, run_chunk
+from .run import column_order
 
 
 def run_batch(scene: Scene | str, cases: Any):
