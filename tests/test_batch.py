@@ -121,3 +121,39 @@ def test_run_batch_s_docstring_example_runs():
     module = importlib.import_module("impactgen.sweep.ensemble")  # (impactgen.sweep is the function)
     failures, tried = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert tried > 0 and failures == 0
+
+
+def test_a_key_that_sets_more_than_its_input_gives_the_per_case_rows():
+    """A link's length also sets its mass where the masses come from a diameter: the batch runs
+    it as simulate does, not as one input set alone in C (that gave P_max 696.6 N against
+    simulate's 717.5 N)."""
+    base = impactgen.load_scene("paper", overrides={"chain.diameter": [0.01, 0.01], "rod.density": 7800.0,
+                                                     "chain.mass": None})
+    table = impactgen.run_batch(base, {"chain.length[1]": [1.0, 1.5]})
+    for value, row in zip([1.0, 1.5], table.itertuples()):
+        expected = impactgen.simulate(base.replace({"chain.length[1]": value}), record_steps=False, warn=False).summary
+        assert row.status == "ok" and row.P_max == expected["P_max"] and row.delta_T == expected["delta_T"]
+
+
+def test_a_key_is_batched_only_where_it_sets_its_input_alone():
+    """The tip's radius is the joints' too where they have none of their own: not one input."""
+    assert batch.plan_for(impactgen.load_scene("paper"), ("rod.tip_radius",)) is not None
+    assert batch.plan_for(impactgen.load_scene("falling-chain"), ("rod.tip_radius",)) is None
+    assert batch.plan_for(impactgen.load_scene("falling-chain", overrides={"contact.joint_radius": 0.004}),
+                          ("rod.tip_radius",)) is not None
+
+
+def test_run_batch_refuses_an_element_beyond_the_scene_s_naming_it():
+    with pytest.raises(SceneError, match=r"initial.u\[5\]"):
+        impactgen.run_batch("paper", {"initial.u[5]": [-0.2]})
+
+
+def test_a_huge_integer_value_is_a_row_not_a_traceback():
+    table = impactgen.run_batch("paper", {"rod.yield_strength": [10**400]})
+    assert table["status"].tolist() == ["invalid"]
+
+
+def test_run_batch_issues_one_validity_warning():
+    with pytest.warns(ValidityWarning) as caught:
+        impactgen.run_batch("paper", {"initial.u[1]": [0.0, 0.0], "initial.u[2]": [-1e-3, -1e-2]})
+    assert len([w for w in caught if issubclass(w.category, ValidityWarning)]) == 1

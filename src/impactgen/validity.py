@@ -35,6 +35,7 @@ from .laws import YIELD_ONSET, ContactConstants, contact_constants, contact_radi
 from .scene import Scene
 
 JACKSON_GREEN_MAX_W = 110.0
+FROZEN_REVERSAL = "tangential speed reverses"  # the words of the frozen-friction warning (paper.py knows it)
 CHATTER_RATIO = THRESHOLD["CHATTER_RATIO"]  # flight shorter than this many contact times (as the machine)
 
 
@@ -187,7 +188,7 @@ def frozen_friction_warning(scene: Scene, impacts, t, y) -> list[str]:
         return []
     k, when = reversed_at[0]
     which = "the impact" if len(impacts) == 1 else f"{len(reversed_at)} of {len(impacts)} impacts (first: impact {k})"
-    return [f"{which}: the {'tip' if impacts[k - 1].point == 'tip' else 'point'}'s tangential speed reverses (t = {when:.6g} s) while friction_mode = \"frozen\" "
+    return [f"{which}: the {'tip' if impacts[k - 1].point == 'tip' else 'point'}'s {FROZEN_REVERSAL} (t = {when:.6g} s) while friction_mode = \"frozen\" "
             "keeps the friction's direction from contact start; from there on the friction does positive work, "
             "which is not physical (the mode reproduces the paper's published energy losses; "
             "\"regularized\" or \"coulomb\" is the physical law)"]

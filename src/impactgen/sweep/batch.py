@@ -86,6 +86,11 @@ def _new_plan(scene: Scene, keys: tuple[str, ...]) -> Plan | None:
             return None
         param_keys.append(position)
         param_index.append(inputs[key])
+    base_params = fill_params(model, scene)
+    inputs_at = tuple(inputs.values())
+    if not all(_sets_its_input_alone(scene, keys[p], k, model, base_params, inputs_at)
+               for p, k in zip(param_keys, param_index)):
+        return None
     settings = ffi.new("ig_batch_settings *")
     solver = scene.solver
     settings.run_to_time = solver.t_end is not None
@@ -94,8 +99,29 @@ def _new_plan(scene: Scene, keys: tuple[str, ...]) -> Plan | None:
     from ..phases import MAX_SEGMENTS
     settings.max_records = MAX_SEGMENTS
     heights = any(_moves_the_start(key) for key in keys)
-    return Plan(scene, keys, model, fill_params(model, scene), tuple(param_keys), tuple(param_index), settings,
-                heights)
+    return Plan(scene, keys, model, base_params, tuple(param_keys), tuple(param_index), settings, heights)
+
+
+PROBE_STEP = 1e-3  # relative change of a key's value in the probe of _sets_its_input_alone
+
+
+def _sets_its_input_alone(scene: Scene, key: str, slot: int, model, base_params, inputs: tuple[int, ...]) -> bool:
+    """Whether `key`, changed in `scene`, changes the model's input `slot` and no other, so that
+    the batch may set that slot alone: a link's length also sets its mass where the masses come
+    from a cross-section, and the tip's radius sets the joints' where they have none of their
+    own. Probed once per plan: the scene with the key's value moved by PROBE_STEP, made as the
+    per-case path makes it (scene_with), against the base's inputs."""
+    from ..model_params import fill_params
+    from ..scene import scene_with
+    from ..errors import SceneError
+    try:
+        value = float(scene[key])
+        probed = fill_params(model, scene_with(scene, {key: value * (1 + PROBE_STEP) if value else PROBE_STEP}))
+    except (SceneError, TypeError, ValueError):
+        return False
+    lib = model.lib
+    return all((lib.model_param_slot(probed, k)[0] != lib.model_param_slot(base_params, k)[0]) == (k == slot)
+               for k in inputs)
 
 
 def _moves_the_start(key: str) -> bool:

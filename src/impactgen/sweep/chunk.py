@@ -201,7 +201,10 @@ def _packed(values: list[Any]) -> np.ndarray | list[Any]:
     """A column of one plain number type as an array; anything else (text, None) as it is."""
     kind = type(values[0]) if values else None
     if kind in NUMBER_TYPES and all(type(v) is kind for v in values):
-        return np.array(values, dtype=kind)
+        try:
+            return np.array(values, dtype=kind)
+        except OverflowError:  # an int beyond 64 bits: kept as Python's, as the row gave it
+            return values
     return values
 
 

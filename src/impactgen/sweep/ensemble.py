@@ -10,7 +10,7 @@ from ..errors import SceneError, excerpt
 from ..scene import Scene, load_scene, split_key
 from .execute import MAX_CHUNK
 from .chunk import CaseOptions, ChunkRows, run_chunk
-from .run import column_order
+from .run import column_order, warn_validity
 
 
 def run_batch(scene: Scene | str, cases: Any):
@@ -53,6 +53,8 @@ def run_batch(scene: Scene | str, cases: Any):
         scene = load_scene(scene)
     columns = _columns(cases)
     keys = tuple(columns)
+    for key in keys:
+        scene[key]  # an element beyond the scene's (initial.u[5] of 2 links) ends here, named
     count = len(next(iter(columns.values()))) if columns else 0
     payload = scene.to_dict()
     parts: list[ChunkRows] = []
@@ -64,7 +66,9 @@ def run_batch(scene: Scene | str, cases: Any):
     if not parts:
         return pd.DataFrame(columns=["case", *keys, "status", "message", "warnings", "wall_s"])
     joined = ChunkRows.joined(parts)
-    return pd.DataFrame({name: joined[name] for name in column_order(joined, keys)})
+    table = pd.DataFrame({name: joined[name] for name in column_order(joined, keys)})
+    warn_validity(table)  # one ValidityWarning for the batch, as a sweep gives
+    return table
 
 
 def _columns(cases: Any) -> dict[str, list[Any]]:

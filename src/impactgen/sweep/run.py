@@ -256,7 +256,7 @@ def _todo(spec: SweepSpec, finished: set[int]) -> CaseList:
     return CaseList(spec, order)
 
 
-def _warn_validity(frame) -> None:
+def warn_validity(frame) -> None:
     """One ValidityWarning for the sweep when some of its cases have validity warnings: how
     many, and the most common kind (a case's first warning, its numbers left out)."""
     warned = [text for text in frame["warnings"] if isinstance(text, str) and text]
@@ -304,7 +304,7 @@ def _run(scene: Scene, spec: SweepSpec, workers: int | None, out: Path | None, p
         if folder:
             folder.write_result(frame)
             folder.finish()
-        _warn_validity(frame)
+        warn_validity(frame)
         return frame
     finally:
         if folder:
