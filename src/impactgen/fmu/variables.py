@@ -22,7 +22,7 @@ from ..codegen.expressions import ModelExpressions
 from ..codegen.parameters import Field
 from ..impacts import COEFFICIENTS
 from ..records import Tallied
-from ..summaries import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
+from ..summaries import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, summary_unit
 
 # kinds the C glue reads and writes (native/fmi2: enum var_kind in model_fmu.h)
 KINDS = ("param", "q0", "u0", "state", "der", "output", "phase", "impacts", "delta_max", "delta_r", "P_max",
@@ -148,39 +148,44 @@ TYPES = get_type_hints(Tallied)  # int or float, per ig_summary member
 # the two summaries of the run from its start to the current time, as impactgen run's (tally.c)
 SUMMARIES = (("first_impact", "the first impact's summary (final once it ended; the run's while it had none)"),
              ("run", "the run's summary from its start to now"))
-SUMMARY_DOCS = {  # unit, what (summaries.py, MODEL section 6)
-    "T0": ("J", "kinetic energy at its start"), "Tf": ("J", "kinetic energy at its end"),
-    "delta_T": ("J", "kinetic energy lost, T0 - Tf"), "delta_max": ("m", "largest maximum compression"),
-    "delta_r": ("m", "permanent deformation of the deepest dent (Eq. 12)"),
-    "P_max": ("N", "largest normal force at maximum compression"), "R_res": ("m", "the deepest dent's radius"),
-    "t_contact": ("s", "contact time of the ended impacts"), "t_impact": ("s", "start of the first impact (NaN: none)"),
-    "n_switches": ("", "phase switches within the first impact"),
-    "n_stick_slip": ("", "stick-slip changes within the first impact"),
-    "impacts": ("", "impacts of the tip"), "joint_impacts": ("", "impacts at the joints"),
-    "first_point": ("", "point of the first impact: n the tip, k joint k, 0 none"),
-    "t_sustained": ("s", "start of sustained contact (NaN: none)"), "t_final": ("s", "time at its end"),
-    "W_normal": ("J", "work of the normal forces"), "W_friction": ("J", "work of the friction forces"),
-    "W_gravity": ("J", "work of gravity"), "residual": ("J", "energy balance residual, delta T - sum of works"),
-    "v_n0": ("m/s", "first impact: normal speed at its start"),
-    "P_c": ("N.s", "first impact: normal impulse of compression"),
-    "P_r": ("N.s", "first impact: normal impulse of restitution"), "P_t": ("N.s", "first impact: tangential impulse"),
-    "e_N": ("", "first impact: kinematic coefficient of restitution (Newton)"),
-    "e_P": ("", "first impact: kinetic coefficient of restitution (Poisson)"),
-    "e_E": ("", "first impact: energetic coefficient of restitution (Stronge)"),
-    "friction_share": ("", "first impact: friction's share of the contact forces' work"),
+SUMMARY_DOCS = {  # what each field is (summaries.py, MODEL section 6); units: summaries.summary_unit
+    "T0": "kinetic energy at its start", "Tf": "kinetic energy at its end",
+    "delta_T": "kinetic energy lost, T0 - Tf", "delta_max": "largest maximum compression",
+    "delta_r": "permanent deformation of the deepest dent (Eq. 12)",
+    "P_max": "largest normal force at maximum compression", "R_res": "the deepest dent's radius",
+    "t_contact": "contact time of the ended impacts", "t_impact": "start of the first impact (NaN: none)",
+    "n_switches": "phase switches within the first impact",
+    "n_stick_slip": "stick-slip changes within the first impact",
+    "impacts": "impacts of the tip", "joint_impacts": "impacts at the joints",
+    "first_point": "point of the first impact: n the tip, k joint k, 0 none",
+    "t_sustained": "start of sustained contact (NaN: none)", "t_final": "time at its end",
+    "W_normal": "work of the normal forces", "W_friction": "work of the friction forces",
+    "W_gravity": "work of gravity", "residual": "energy balance residual, delta T - sum of works",
+    "v_n0": "first impact: normal speed at its start",
+    "P_c": "first impact: normal impulse of compression",
+    "P_r": "first impact: normal impulse of restitution", "P_t": "first impact: tangential impulse",
+    "e_N": "first impact: kinematic coefficient of restitution (Newton)",
+    "e_P": "first impact: kinetic coefficient of restitution (Poisson)",
+    "e_E": "first impact: energetic coefficient of restitution (Stronge)",
+    "friction_share": "first impact: friction's share of the contact forces' work",
 }
+
+
+def _summary_unit(name: str) -> str:
+    """A summary field's unit (summaries.SUMMARY_UNITS) as the modelDescription writes it."""
+    unit = summary_unit(name) or ""
+    return "" if unit == "1" else unit.replace(" ", ".")
 
 
 def summary_fields(n: int) -> list[tuple[str, str, int, str, str]]:
     """A summary's fields as `impactgen run --json` and the sweep's columns name them (name,
     ig_summary member, entry of an array member, unit, what), in the sweep's order."""
     def field(name: str, member: str | None = None) -> tuple[str, str, int, str, str]:
-        unit, doc = SUMMARY_DOCS[member or name]
-        return name, member or name, 0, unit, doc
+        return name, member or name, 0, _summary_unit(member or name), SUMMARY_DOCS[member or name]
 
-    final = [(f"{which}_final[{i + 1}]", "y_final", i + offset, unit, f"{what} of link {i + 1} at its end")
-             for which, offset, unit, what in (("u", n, "rad/s", "angular speed"), ("q", 0, "rad", "angle"))
-             for i in range(n)]
+    final = [(f"{which}_final[{i + 1}]", "y_final", i + offset, _summary_unit(f"{which}_final"),
+              f"{what} of link {i + 1} at its end")
+             for which, offset, what in (("u", n, "angular speed"), ("q", 0, "angle")) for i in range(n)]
     return [*(field(name) for name in (*SUMMARY_LEADING, "n_switches", "n_stick_slip")), *final,
             *(field(name) for name in SUMMARY_LATER), *(field(f"energy.{name}", name) for name in ENERGY_TERMS),
             *(field(f"coefficients.{name}", name) for name in COEFFICIENTS)]
