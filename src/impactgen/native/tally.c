@@ -27,7 +27,7 @@ void ig_read_point(ig_point *point, double t, const double *y, const double *out
     point->t = t;
     point->T = out[MODEL_OUT_T];
     point->V = out[MODEL_OUT_V];
-    point->W_normal = y[2 * MODEL_NQ];
+    point->W_normal = y[MODEL_Y_W_normal];
 #ifdef MODEL_Y_W_friction
     point->W_friction = y[MODEL_Y_W_friction];
 #else

@@ -129,6 +129,19 @@ class Scene(_KeyHint):
         return self.chain.base == "free"
 
     @property
+    def dof(self) -> int:
+        """The generalized coordinates: the links' angles, and a free chain's base point's x, y."""
+        return self.n + (2 if self.free else 0)
+
+    @property
+    def motion_start(self) -> tuple[float, ...]:
+        """The motion's state at the start, in the generated model's order: the angles (and a
+        free chain's base point), then their rates (and the base point's velocity)."""
+        if not self.free:
+            return self.q0 + self.u0
+        return self.q0 + self.base_start + self.u0 + self.base_velocity
+
+    @property
     def surface_angle(self) -> float:
         """The surface's inclination in radians (positive: it descends towards +x)."""
         return math.radians(self.surface_angle_deg)
