@@ -57,8 +57,8 @@ class Parameter:
 
     def names(self, links: int, joints: tuple[int, ...] = ()) -> list[tuple[str, str, int]]:
         """(C name, scene key, link or joint index from 0) of each field the row stands for."""
-        if self.per_joint:
-            return [(f"{self.name}{j}", self.key.format(i=j), j - 1) for j in joints]
+        if self.per_joint:  # (a free chain's base point, 0, has its own row: R_base)
+            return [(f"{self.name}{j}", self.key.format(i=j), j - 1) for j in joints if j > 0]
         if not self.per_link:
             return [(self.name, self.key, 0)]
         return [(f"{self.name}{i}", self.key.format(i=i), i - 1) for i in range(1, links + 1)]
@@ -233,7 +233,6 @@ def fields(links: int, friction_law: str, used: set[str], joints: tuple[int, ...
     `joints` (and at a free chain's base point if `base`), whose expressions (force laws,
     events, switch laws) read the symbols in `used` (without the per-point fields:
     `point_fields`)."""
-    joints = tuple(j for j in joints if j > 0)  # the base point's radius is R_base's row
     return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction_law, used, base)
                  and not p.per_point for name, key, link in p.names(links, joints))
 

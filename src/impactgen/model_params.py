@@ -42,7 +42,7 @@ def _inputs(scene: Scene, rows: tuple[Parameter, ...], joints: tuple[int, ...]) 
         if row.per_link:
             values.extend(row.read(scene))
         elif row.per_joint:
-            values.extend(row.read(scene)[j - 1] for j in joints)
+            values.extend(row.read(scene)[j - 1] for j in joints if j > 0)  # the base point: R_base
         else:
             values.append(row.read(scene))
     return values
