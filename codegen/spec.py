@@ -20,14 +20,14 @@ STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplast
 
 
 def point_name(number: int, n: int) -> str:
-    """The name of contact point `number` (1 to n) of an n-link chain: "joint k" (the end of
-    link k), or "tip"."""
-    return "tip" if number == n else f"joint {number}"
+    """The name of contact point `number` (0 to n) of an n-link chain: "base" (a free chain's
+    base point, 0), "joint k" (the end of link k), or "tip"."""
+    return "tip" if number == n else ("base" if number == 0 else f"joint {number}")
 
 
 def point_number(point: str, n: int) -> int:
-    """A point's number as the C engine records it: k for "joint k", n for "tip"."""
-    return n if point == "tip" else int(point.split()[-1])
+    """A point's number as the C engine records it: 0 for "base", k for "joint k", n for "tip"."""
+    return n if point == "tip" else (0 if point == "base" else int(point.split()[-1]))
 
 
 @dataclass(frozen=True)
