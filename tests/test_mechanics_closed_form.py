@@ -36,3 +36,15 @@ def test_a_long_chain_agrees_with_the_reference_engine():
     for key in ("delta_max", "delta_r", "P_max", "T0", "Tf"):
         assert c[key] == pytest.approx(ref[key], rel=1e-5), key
     assert c["u_final"] == pytest.approx(ref["u_final"], rel=1e-5, abs=1e-8)
+
+
+@pytest.mark.parametrize("n, free, inclined", [(1, True, False), (2, True, True), (3, True, False),
+                                               (2, False, True), (1, True, True)])
+def test_closed_form_of_free_and_inclined_chains_equals_kanes_method(n, free, inclined):
+    """A free base point (two more coordinates) and gravity along an inclined surface, in both
+    derivations."""
+    kane, closed = derive_chain(n, free, inclined), closed_form_chain(n, free, inclined)
+    parts = _parts(kane) + list(kane.joint_x) + list(kane.joint_y)
+    others = _parts(closed) + list(closed.joint_x) + list(closed.joint_y)
+    for a, b in zip(parts, others, strict=True):
+        assert sm.simplify(sm.expand_trig(a - b)) == 0

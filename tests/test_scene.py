@@ -306,7 +306,7 @@ def test_an_attribute_the_scene_lacks_names_the_dotted_key_meant(attribute, key)
 
 def test_the_initial_table_is_named_by_its_keys():
     with pytest.raises(AttributeError, match=re.escape("(the [initial] table's keys: initial.q_deg, initial.q, "
-                                                       "initial.u)")):
+                                                       "initial.u, initial.base, initial.base_velocity)")):
         impactgen.load_scene("paper").initial
 
 

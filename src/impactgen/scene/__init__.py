@@ -17,14 +17,14 @@ from __future__ import annotations
 from .loading import MAX_SCENE_BYTES, load_scene, scene_from_dict, scene_from_text, steel_chain_scene
 from .model import Chain, Contact, Material, Scene, Solver
 from .overrides import checked_overrides, parse_override
-from .physics import TOUCH_TOLERANCE, joint_heights
-from .schema import (CONTACT_MODELS, EXPLICIT_METHODS, FRICTION_MODES, JACOBIAN_AUTO_MAX_LINKS, JACOBIANS,
+from .physics import TOUCH_TOLERANCE, initial_surface_height, joint_heights
+from .schema import (BASES, CONTACT_MODELS, EXPLICIT_METHODS, FRICTION_MODES, JACOBIAN_AUTO_MAX_LINKS, JACOBIANS,
                      METHODS, NAME_PATTERN, SCHEMA, Key, split_key)
 from .updates import replace_solver, scene_with, solver_with, with_solver
 from .values import check_value, check_values, plain
 
-__all__ = ["CONTACT_MODELS", "EXPLICIT_METHODS", "FRICTION_MODES", "JACOBIAN_AUTO_MAX_LINKS", "JACOBIANS",
+__all__ = ["BASES", "CONTACT_MODELS", "EXPLICIT_METHODS", "FRICTION_MODES", "JACOBIAN_AUTO_MAX_LINKS", "JACOBIANS",
            "MAX_SCENE_BYTES", "METHODS", "NAME_PATTERN", "SCHEMA", "TOUCH_TOLERANCE", "Chain", "Contact", "Key",
-           "Material", "Scene", "Solver", "check_value", "check_values", "checked_overrides", "joint_heights",
+           "Material", "Scene", "Solver", "check_value", "check_values", "checked_overrides", "initial_surface_height", "joint_heights",
            "load_scene", "parse_override", "plain", "replace_solver", "scene_from_dict", "scene_from_text",
            "scene_with", "solver_with", "split_key", "steel_chain_scene", "with_solver"]

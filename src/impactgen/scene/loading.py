@@ -13,7 +13,7 @@ from .derived import fill_from_material, link_masses
 from .model import Chain, Contact, Material, Scene, Solver
 from .overrides import apply_overrides, checked_overrides, tables_copied, tomllib
 from .physics import check_physics
-from .schema import MISSING, SCHEMA, did_you_mean, resolve_jacobian
+from .schema import FREE_KEYS, MISSING, SCHEMA, did_you_mean, resolve_jacobian
 from .values import coerce, plain
 
 MAX_SCENE_BYTES = 16 * 2**20  # a scene file is a few hundred bytes; /dev/zero would never end
@@ -68,10 +68,12 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
                        get("surface", "material"))
     length = get("chain", "length", n)
     mass, diameter, area = link_masses(get, "mass" in sections["chain"], n, length, rod.density)
-    chain = Chain(n, length, mass, get("chain", "gravity"), diameter, area)
+    base = get("chain", "base")
+    chain = Chain(n, length, mass, get("chain", "gravity"), diameter, area, base)
+    base0, base_u0 = _base_start(get, sections, base == "free")
     contact = Contact(get("contact", "model"), get("contact", "friction"),
                       get("contact", "friction_mode"), get("contact", "friction_eps"),
-                      get("contact", "joint_radius", n))
+                      get("contact", "joint_radius", n), get("contact", "base_radius"))
     q_deg, q_rad = get("initial", "q_deg", n), get("initial", "q", n)
     if (q_deg is None) == (q_rad is None):
         raise SceneError("initial.q", "give exactly one of initial.q (rad) and initial.q_deg")
@@ -80,11 +82,32 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     solver = Solver(method, resolve_jacobian(method, jacobian_setting, n), get("solver", "rtol"), get("solver", "atol"),
                     get("solver", "t_end"), get("solver", "t_max"), get("solver", "max_steps"),
                     get("solver", "sustained_contact"), jacobian_setting)
+    # surface.height not given: "initial" (None) under a pinned chain, 0 under a free one
+    height = get("surface", "height") if "height" in sections["surface"] or base != "free" else 0.0
     scene = Scene(name, chain, rod, get("rod", "tip_radius"), surface,
-                  get("surface", "height"), contact, q0, get("initial", "u", n), solver,
-                  source=source)
+                  height, contact, q0, get("initial", "u", n), solver,
+                  source=source, surface_angle_deg=get("surface", "angle_deg"), base0=base0, base_u0=base_u0)
     check_physics(scene)
     return scene
+
+
+def _base_start(get: Any, sections: dict[str, dict[str, Any]], free: bool
+                ) -> tuple[tuple[float, float] | None, tuple[float, float] | None]:
+    """(initial.base, initial.base_velocity) of a free chain (the velocity zero where not
+    given); (None, None) for a pinned one, which may give neither key nor contact.base_radius."""
+    if not free:
+        for dotted in FREE_KEYS:
+            section, _, key = dotted.partition(".")
+            if key in sections[section]:
+                raise SceneError(dotted, f"{dotted} is a free chain's key: a pinned chain's base is its pivot, "
+                                         'fixed at the origin; set chain.base = "free" or leave the key out')
+        return None, None
+    base0 = get("initial", "base")
+    if base0 is None:
+        raise SceneError("initial.base", "a free chain (chain.base = \"free\") needs its base point's start: "
+                                         "initial.base = [x, y] in m, in the surface's frame")
+    velocity = get("initial", "base_velocity")
+    return base0, velocity if velocity is not None else (0.0, 0.0)
 
 
 def load_scene(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:

@@ -55,6 +55,7 @@ class Chain(_KeyHint):
     gravity: float
     diameter: tuple[float, ...] | None = None
     area: tuple[float, ...] | None = None
+    base: str = "pinned"  # "pinned" | "free" (chain.base)
 
     _section = "chain"
 
@@ -67,6 +68,8 @@ class Contact(_KeyHint):
     friction_eps: float
     # contact.joint_radius as given, one per joint (n - 1); None: every joint has the tip's radius
     joint_radius: tuple[float, ...] | None = None
+    # contact.base_radius as given (a free chain's); None: the base has the tip's radius
+    base_radius: float | None = None
 
     _section = "contact"
 
@@ -88,7 +91,11 @@ class Solver(_KeyHint):
 
 @dataclass(frozen=True)
 class Scene(_KeyHint):
-    """A checked scene. Angles are radians; `surface_height` None means 'initial'."""
+    """A checked scene. Angles are radians; `surface_height` None means 'initial'.
+
+    A free chain (``chain.base = "free"``) has its base point's start `base0` and velocity
+    `base_u0` ([x, y] and [vx, vy] in the surface's frame); a pinned one has None for both.
+    `surface_angle_deg` is the surface's inclination (it descends towards +x)."""
 
     name: str
     chain: Chain
@@ -101,6 +108,9 @@ class Scene(_KeyHint):
     u0: tuple[float, ...]
     solver: Solver
     source: str = field(default="<memory>", compare=False)
+    surface_angle_deg: float = 0.0
+    base0: tuple[float, float] | None = None
+    base_u0: tuple[float, float] | None = None
 
     @property
     def n(self) -> int:
@@ -112,6 +122,34 @@ class Scene(_KeyHint):
         values, the tip radius where `contact.joint_radius` is not given (empty for one link)."""
         given = self.contact.joint_radius
         return given if given is not None else (self.tip_radius,) * (self.n - 1)
+
+    @property
+    def free(self) -> bool:
+        """True for a free chain: its base point moves and is a contact point (point 0)."""
+        return self.chain.base == "free"
+
+    @property
+    def surface_angle(self) -> float:
+        """The surface's inclination in radians (positive: it descends towards +x)."""
+        return math.radians(self.surface_angle_deg)
+
+    @property
+    def base_radius(self) -> float:
+        """The contact radius of a free chain's base point, in m: `contact.base_radius`, else
+        the tip's."""
+        given = self.contact.base_radius
+        return given if given is not None else self.tip_radius
+
+    @property
+    def base_start(self) -> tuple[float, float]:
+        """The base point's position at the start, in m: the free chain's `initial.base`, the
+        pivot (the origin) for a pinned chain."""
+        return self.base0 if self.base0 is not None else (0.0, 0.0)
+
+    @property
+    def base_velocity(self) -> tuple[float, float]:
+        """The base point's velocity at the start, in m/s (zero for a pinned chain)."""
+        return self.base_u0 if self.base_u0 is not None else (0.0, 0.0)
 
     # Read by key, not iterated: `for x in scene` would walk integer "keys".
     __iter__ = None
@@ -155,7 +193,7 @@ class Scene(_KeyHint):
         if index is None:
             return value
         if index > len(value):
-            per = "joint" if SCHEMA[section][name].kind == "joint_floats" else "link"
+            per = {"joint_floats": "joint", "pair": "coordinate"}.get(SCHEMA[section][name].kind, "link")
             raise SceneError(key, f"index {index} is out of range: {section}.{name} has {len(value)} elements "
                                   f"(one per {per}, numbered from 1)")
         return value[index - 1]
@@ -205,17 +243,21 @@ class Scene(_KeyHint):
         return {
             "name": self.name,
             "chain": {"links": chain.links, "length": list(chain.length), **_stated_masses(chain),
-                      "gravity": chain.gravity},
+                      "gravity": chain.gravity, **({"base": chain.base} if self.free else {})},
             "rod": {**_stated_material(self.rod), "tip_radius": self.tip_radius},
             "surface": {**_stated_material(self.surface),
-                        "height": "initial" if self.surface_height is None else self.surface_height},
+                        "height": "initial" if self.surface_height is None else self.surface_height,
+                        **({"angle_deg": self.surface_angle_deg} if self.surface_angle_deg else {})},
             "contact": {"model": self.contact.model, "friction": self.contact.friction,
                         "friction_mode": self.contact.friction_mode,
                         "friction_eps": self.contact.friction_eps,
                         # left out when not given: the joints then follow rod.tip_radius
                         **({} if self.contact.joint_radius is None
-                           else {"joint_radius": list(self.contact.joint_radius)})},
-            "initial": {"q": list(self.q0), "u": list(self.u0)},
+                           else {"joint_radius": list(self.contact.joint_radius)}),
+                        **({} if self.contact.base_radius is None else {"base_radius": self.contact.base_radius})},
+            "initial": {"q": list(self.q0), "u": list(self.u0),
+                        **({"base": list(self.base_start), "base_velocity": list(self.base_velocity)}
+                           if self.free else {})},
             "solver": {"method": s.method, "jacobian": s.jacobian_setting, "rtol": s.rtol,
                        "atol": s.atol, "t_end": "separation" if s.t_end is None else s.t_end,
                        "t_max": s.t_max, "max_steps": s.max_steps,
@@ -235,10 +277,18 @@ def _whole_value(scene: Scene, section: str, key: str) -> Any:
     """The value of key `section.key` of `scene` (not an element of it), as `Scene.__getitem__`
     gives it."""
     if section == "initial":
-        angles = {"q": list(scene.q0), "q_deg": [math.degrees(v) for v in scene.q0], "u": list(scene.u0)}
+        angles = {"q": list(scene.q0), "q_deg": [math.degrees(v) for v in scene.q0], "u": list(scene.u0),
+                  "base": list(scene.base0) if scene.base0 is not None else None,
+                  "base_velocity": list(scene.base_u0) if scene.base_u0 is not None else None}
         return angles[key]
     if section == "contact" and key == "joint_radius":
         return list(scene.joint_radii)
+    if section == "contact" and key == "base_radius":  # a pinned chain's base is no contact point
+        return scene.base_radius if scene.free else None
+    if (section, key) == ("chain", "base"):
+        return scene.chain.base
+    if (section, key) == ("surface", "angle_deg"):
+        return scene.surface_angle_deg
     if section in ("chain", "rod", "surface") and key in _RESOLVED:  # given, or from a key that gives it
         value = getattr(getattr(scene, section), key)
         return list(value) if isinstance(value, tuple) else value

@@ -16,8 +16,9 @@ TOUCH_TOLERANCE = THRESHOLD["TOUCH_TOLERANCE"]
 
 
 def joint_heights(scene: Scene) -> list[float]:
-    """Heights of the pivot (0), of every joint and of the tip (last), in m, at the start."""
-    heights = [0.0]
+    """Heights of the base (the pivot at 0, or a free chain's base point), of every joint and
+    of the tip (last), in m, at the start."""
+    heights = [scene.base_start[1]]
     for L, q in zip(scene.chain.length, scene.q0):
         heights.append(heights[-1] + L * math.sin(q))
     return heights
@@ -30,6 +31,9 @@ def check_physics(scene: Scene) -> None:
     if broken:
         raise SceneError(broken[0].key, broken[1])
     heights = joint_heights(scene)
+    if scene.free:
+        _check_free_start(scene, heights)
+        return
     y_tip = heights[-1]
     slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
     if scene.surface_height is not None and scene.surface_height - y_tip > slack:
@@ -50,3 +54,30 @@ def check_physics(scene: Scene) -> None:
                              f"y = {low:.6g} m, the surface at y = {y_s:.6g} m{height}; every point "
                              "of the chain must start on or above the surface (the joints and the tip "
                              "may touch it)")
+
+
+def initial_surface_height(scene: Scene) -> float:
+    """The surface's height y_s at the start, in m: `surface.height`, or with "initial" the
+    height of the lowest contact point (a pinned chain's tip, which the checks make its lowest;
+    a free chain's base point, joints and tip)."""
+    if scene.surface_height is not None:
+        return scene.surface_height
+    heights = joint_heights(scene)
+    return min(heights) if scene.free else heights[-1]
+
+
+def _check_free_start(scene: Scene, heights: list[float]) -> None:
+    """A free chain's every point (the base point, the joints, the tip: each a contact point)
+    starts on or above the surface; a straight bar is lowest at one of its ends."""
+    slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
+    y_s = initial_surface_height(scene)
+    if y_s - heights[0] > slack:
+        raise SceneError("initial.base", f"the free chain's base point starts {y_s - heights[0]:.3g} m inside "
+                         f"the surface (base at y = {heights[0]:.6g} m, surface at y = {y_s:.6g} m); "
+                         "raise initial.base[2] or lower surface.height")
+    for k, y in enumerate(heights[1:], start=1):
+        if y_s - y > slack:
+            where = "the tip" if k == scene.n else f"joint {k}"
+            raise SceneError("initial.q", f"{where} of the free chain starts {y_s - y:.3g} m inside the surface "
+                             f"(at y = {y:.6g} m, the surface at y = {y_s:.6g} m); every point must start on "
+                             "or above the surface: change initial.q or raise initial.base")

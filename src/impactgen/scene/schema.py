@@ -29,7 +29,12 @@ JACOBIANS = ("auto", "analytic", "difference")
 # symbolic and compile cost (n = 10: +10 s, n = 20: +3 min) buys no measurable speed, since
 # CVODE evaluates it only ~10-15 times per impact; "analytic" still forces it.
 JACOBIAN_AUTO_MAX_LINKS = 6
-
+# "pinned": the first link hangs from a fixed pivot; "free": nothing holds the chain, its base
+# point (the first link's start) moves and is a contact point of its own
+BASES = ("pinned", "free")
+# the keys only a free chain takes (a pinned chain's base is its pivot, fixed at the origin)
+FREE_KEYS = ("initial.base", "initial.base_velocity", "contact.base_radius")
+MAX_SURFACE_ANGLE_DEG = 90.0  # the surface's angle lies in (-90, 90) degrees
 
 
 MISSING = object()  # the default of a key the scene must give
@@ -57,6 +62,11 @@ def _physical(key: str) -> Check:
     return check
 
 
+def _surface_angle(v: float) -> str | None:
+    limit = MAX_SURFACE_ANGLE_DEG
+    return None if -limit < v < limit else f"must lie in (-{limit:g}, {limit:g}) degrees"
+
+
 def _tolerance(v: float) -> str | None:
     return None if 0 < v < 1 else "must lie in (0, 1)"
 
@@ -66,7 +76,7 @@ class Key:
     """One scene key: its expected kind, default and check."""
 
     # "float", "int", "str", "name", "bool", "floats" (one number or a list of n), "list",
-    # "joint_floats" (one number or a list of n - 1: one per joint)
+    # "joint_floats" (one number or a list of n - 1: one per joint), "pair" (a list of 2: [x, y])
     kind: str
     default: Any = MISSING
     check: Check | None = None
@@ -86,6 +96,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # the links' cross-section: their masses are then rod.density x area x length
         "diameter": Key("floats", None, positive, doc="m; a round bar's, one number or a list of n"),
         "area": Key("floats", None, positive, doc="m^2; one number or a list of n"),
+        "base": Key("str", "pinned", choices=BASES,
+                    doc='"pinned": the first link hangs from a fixed pivot; "free": nothing holds the chain'),
     },
     "rod": {
         "material": Key("str", None, choices=MATERIAL_NAMES, doc=MATERIAL_DOC),
@@ -102,7 +114,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "nu": Key("float", check=_physical("surface.nu"), doc="dimensionless; or give surface.material"),
         "yield_strength": Key("float", check=_physical("surface.yield_strength"),
                               doc="Pa; or give surface.material", symbols=("S_y",)),
-        "height": Key("height", "initial", doc='"initial" or a number in m'),
+        # the default depends on the chain: "initial" for a pinned chain, 0 for a free one
+        "height": Key("height", None, doc='"initial" or a number in m; default "initial" (pinned), 0 (free)'),
+        "angle_deg": Key("float", 0.0, _surface_angle,
+                         doc="degrees in (-90, 90): the surface descends towards +x at this angle"),
     },
     "contact": {
         "model": Key("str", "three-phase", choices=CONTACT_MODELS),
@@ -113,11 +128,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # a joint's contact radius has the tip radius's range
         "joint_radius": Key("joint_floats", None, _physical("rod.tip_radius"),
                             doc="m; one number or a list of n - 1 (one per joint); default rod.tip_radius"),
+        "base_radius": Key("float", None, _physical("rod.tip_radius"),
+                           doc="m; a free chain's base point's contact radius; default rod.tip_radius"),
     },
     "initial": {
         "q_deg": Key("list", None, doc="degrees"),
         "q": Key("list", None, doc="radians"),
         "u": Key("list", doc="rad/s", symbols=("omega",)),
+        "base": Key("pair", None, doc="m; [x, y]: a free chain's base point at the start, in the surface's frame"),
+        "base_velocity": Key("pair", None, doc="m/s; [vx, vy]: a free chain's base point's velocity; default [0, 0]"),
     },
     "solver": {
         "method": Key("str", "auto", choices=METHODS),
@@ -160,7 +179,7 @@ def did_you_mean(name: str) -> str:
     return f" (did you mean '{match[0]}'?)" if match else ""
 
 
-LIST_KINDS = ("floats", "list", "joint_floats")  # the kinds of key whose elements an index names
+LIST_KINDS = ("floats", "list", "joint_floats", "pair")  # the kinds of key whose elements an index names
 INDEXED_KEY = re.compile(r"^(?P<key>[A-Za-z0-9_.]+)\[(?P<index>[^\]]*)\]$")
 
 

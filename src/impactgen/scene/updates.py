@@ -17,7 +17,8 @@ from .values import check_split
 # The keys whose new value re-decides other fields (the links size every list; a material
 # gives E, nu, the yield strength and the density; a density and a cross-section give the
 # masses): a case that changes one is read in full.
-_REREAD = {"chain.links", "rod.material", "surface.material", "rod.density", "chain.diameter", "chain.area"}
+_REREAD = {"chain.links", "rod.material", "surface.material", "rod.density", "chain.diameter", "chain.area",
+           "chain.base", "initial.base", "initial.base_velocity", "contact.base_radius", "surface.angle_deg"}
 # ... and these too where the masses come from a cross-section (a length changes a mass; a
 # mass replaces the cross-section)
 _REREAD_WITH_SECTION = {"chain.length", "chain.mass"}

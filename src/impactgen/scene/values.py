@@ -80,6 +80,11 @@ def coerce(key: str, v: Any, spec: Key, n: int) -> Any:
         return (_checked(key, _number(key, v), spec),) * (n - 1)
     if spec.kind == "list":
         return _numbers(key, v, n)
+    if spec.kind == "pair":  # a point or a velocity in the plane: [x, y]
+        if not isinstance(v, list) or len(v) != 2:
+            got = f"{len(v)} values" if isinstance(v, list) else f"{type(v).__name__} {v!r}"
+            raise SceneError(key, f"expected a list of 2 numbers [x, y], got {got}")
+        return _numbers(key, v, 2, "coordinate")
     if spec.kind == "height":
         if v == "initial":
             return None
