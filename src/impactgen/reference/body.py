@@ -25,8 +25,6 @@ class Body:
     @classmethod
     def from_scene(cls, scene: Scene) -> "Body":
         """The body the scene's keys describe."""
-        if "chain.base" not in scene.keys():  # a scene package without free bodies: a pinned chain, level
-            return cls()
         slope = math.radians(scene["surface.angle_deg"])
         if scene["chain.base"] != "free":
             return cls(slope=slope)
@@ -34,8 +32,8 @@ class Body:
                    scene["contact.base_radius"])
 
     def start(self, scene: Scene) -> tuple[list[float], list[float]]:
-        """The positions and speeds at t = 0 in the state's order (the base's first for a free
-        chain)."""
+        """The positions and speeds at t = 0 in the state's order (the base's after the angles
+        for a free chain)."""
         if not self.free:
             return list(scene.q0), list(scene.u0)
-        return [*self.base_position, *scene.q0], [*self.base_velocity, *scene.u0]
+        return [*scene.q0, *self.base_position], [*scene.u0, *self.base_velocity]

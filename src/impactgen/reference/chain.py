@@ -34,26 +34,27 @@ Its generalized force on q_i is then
 which for a = 0 is the term -g L_i cos(q_i) b_i above.
 
 A free chain: nothing holds the first link's start, the base point r_0 = (x_0, y_0); its two
-coordinates join the angles. The state is (x_0, y_0, q_1..q_n, u_0x, u_0y, u_1..u_n), the base's
-coordinates and speeds first. Every point moves with the base: r_Cj = r_0 + sum_i a_ji L_i e_i,
+coordinates join the angles, after them. The state is (q_1..q_n, x_0, y_0, u_1..u_n, u_x0, u_y0),
+as the C model lays it out. Every point moves with the base: r_Cj = r_0 + sum_i a_ji L_i e_i,
 v_Cj = v_0 + sum_i a_ji L_i u_i e_i', so that
 
     T = 1/2 m v_0.v_0 + v_0 . sum_i b_i L_i u_i e_i' + 1/2 sum_ik M_ik u_i u_k,
 
-m = sum_j m_j, since sum_j m_j a_ji = b_i. The mass matrix in (u_0x, u_0y, u_1..u_n) is
+v_0 = (u_x0, u_y0), m = sum_j m_j, since sum_j m_j a_ji = b_i. The mass matrix in
+(u_1..u_n, u_x0, u_y0) is
 
-    [ m           0           -b_k L_k sin q_k ]
-    [ 0           m            b_k L_k cos q_k ]
-    [ -b_i L_i sin q_i   b_i L_i cos q_i   M_ik ]
+    [ M_ik                -b_i L_i sin q_i   b_i L_i cos q_i ]
+    [ -b_k L_k sin q_k    m                  0               ]
+    [ b_k L_k cos q_k     0                  m               ]
 
-Lagrange's equation of x_0: d/dt(m u_0x - sum_i b_i L_i sin(q_i) u_i) = Q_x, of y_0:
-d/dt(m u_0y + sum_i b_i L_i cos(q_i) u_i) = Q_y, so their rows read
+Lagrange's equation of x_0: d/dt(m u_x0 - sum_i b_i L_i sin(q_i) u_i) = Q_x, of y_0:
+d/dt(m u_y0 + sum_i b_i L_i cos(q_i) u_i) = Q_y, so their rows read
 
-    m du_0x/dt - sum_i b_i L_i sin q_i du_i/dt = Q_x + sum_i b_i L_i cos(q_i) u_i^2,
-    m du_0y/dt + sum_i b_i L_i cos q_i du_i/dt = Q_y + sum_i b_i L_i sin(q_i) u_i^2.
+    m du_x0/dt - sum_i b_i L_i sin q_i du_i/dt = Q_x + sum_i b_i L_i cos(q_i) u_i^2,
+    m du_y0/dt + sum_i b_i L_i cos q_i du_i/dt = Q_y + sum_i b_i L_i sin(q_i) u_i^2.
 
-In the equation of q_i, v_0's term gives d/dt(b_i L_i (-u_0x sin q_i + u_0y cos q_i)) =
-b_i L_i (-sin q_i du_0x/dt + cos q_i du_0y/dt) - b_i L_i u_i (u_0x cos q_i + u_0y sin q_i), and
+In the equation of q_i, v_0's term gives d/dt(b_i L_i (-u_x0 sin q_i + u_y0 cos q_i)) =
+b_i L_i (-sin q_i du_x0/dt + cos q_i du_y0/dt) - b_i L_i u_i (u_x0 cos q_i + u_y0 sin q_i), and
 dT/dq_i the same last term, which cancels: the angles' rows gain the mass matrix's coupling
 and nothing else. With point 0 the base (its Jacobian: the rows (1, 0) and (0, 1) of x_0, y_0
 and nothing of the angles) and point k moving with the base and the links i <= k, a force
@@ -80,8 +81,8 @@ HOLD_RCOND = 1e-8
 class ChainModel:
     """The chain's constants and equations: its mass matrix, its accelerations under the loads
     its links carry, the kinematics of its points, the forces that hold points still and its
-    energies. Positions and speeds are the generalized ones: the angles and their rates, after
-    the base's coordinates and speeds for a free chain (`base`)."""
+    energies. Positions and speeds are the generalized ones: the angles and their rates, and
+    after them the base's coordinates and speeds for a free chain."""
 
     L: np.ndarray
     m: np.ndarray
@@ -89,7 +90,7 @@ class ChainModel:
     c: np.ndarray  # c_ik of the docstring (n x n)
     inertia: np.ndarray  # m_i L_i^2 / 12
     gravity_arm: np.ndarray  # b_i = m_i/2 + sum_{j>i} m_j
-    free: bool = False  # the base is free: its coordinates x_0, y_0 lead the positions
+    free: bool = False  # the base is free: its coordinates x_0, y_0 follow the angles
     slope: float = 0.0  # the surface's angle a (rad), descending towards +x
 
     @classmethod
@@ -106,14 +107,9 @@ class ChainModel:
         return cls(L, m, scene.chain.gravity, np.outer(L, L) * mu, m * L ** 2 / 12, m / 2 + outboard, free, slope)
 
     @cached_property
-    def base(self) -> int:
-        """The number of base coordinates ahead of the angles: 2 for a free chain, else 0."""
-        return 2 if self.free else 0
-
-    @cached_property
     def dof(self) -> int:
         """The generalized coordinates: the angles, and the base's two for a free chain."""
-        return len(self.L) + self.base
+        return len(self.L) + (2 if self.free else 0)
 
     @cached_property
     def gravity_vector(self) -> tuple[float, float]:
@@ -135,8 +131,8 @@ class ChainModel:
         return float(self.m.sum())
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        """M at positions q (the base's coordinates first for a free chain)."""
-        angles = q[self.base:]
+        """M at positions q (the base's coordinates after the angles for a free chain)."""
+        angles = q[:len(self.L)]
         M_links = self.c * np.cos(np.subtract.outer(angles, angles)) + self.inertia_matrix
         if not self.free:
             return M_links
@@ -145,11 +141,12 @@ class ChainModel:
     def _free_mass_matrix(self, M_links: np.ndarray, arm: np.ndarray, cos_q: np.ndarray,
                           sin_q: np.ndarray) -> np.ndarray:
         """The free chain's M around the angles' block (the module docstring), arm = b_i L_i."""
+        n = len(self.L)
         M = np.empty((self.dof, self.dof))
-        M[:2, :2] = np.eye(2) * self.total_mass
-        M[0, 2:], M[1, 2:] = -arm * sin_q, arm * cos_q
-        M[2:, :2] = M[:2, 2:].T
-        M[2:, 2:] = M_links
+        M[:n, :n] = M_links
+        M[n:, n:] = np.eye(2) * self.total_mass
+        M[n, :n], M[n + 1, :n] = -arm * sin_q, arm * cos_q
+        M[:n, n:] = M[n:, :n].T
         return M
 
     def accelerations(self, q: np.ndarray, u: np.ndarray, F: float | np.ndarray,
@@ -158,16 +155,10 @@ class ChainModel:
         from `loads`, or numbers that every link (and the base) carries (forces at point n
         alone). The right-hand side calls this at every evaluation: each angle difference,
         cosine and sine is taken once."""
-        b = self.base
-        angles, rates = q[b:], u[b:]
-        if self.free and np.ndim(F):
-            F_base, F = F[0], F[1:]
-        else:
-            F_base = F
-        if self.free and np.ndim(F_f):
-            F_f_base, F_f = F_f[0], F_f[1:]
-        else:
-            F_f_base = F_f
+        n = len(self.L)
+        angles, rates = q[:n], u[:n]
+        F_base, F = (F[n], F[:n]) if self.free and np.ndim(F) else (F, F)
+        F_f_base, F_f = (F_f[n], F_f[:n]) if self.free and np.ndim(F_f) else (F_f, F_f)
         dq = np.subtract.outer(angles, angles)
         velocity_terms = (self.c * np.sin(dq)) @ (rates * rates)
         cos_q, sin_q = np.cos(angles), np.sin(angles)
@@ -180,19 +171,21 @@ class ChainModel:
             return solve(M_links, Q - velocity_terms)
         arm = self.gravity_arm * self.L
         squares = arm * rates * rates
-        forcing = np.concatenate([[self.total_mass * g_x + F_f_base + squares @ cos_q,
-                                   self.total_mass * g_y + F_base + squares @ sin_q], Q - velocity_terms])
+        forcing = np.concatenate([Q - velocity_terms, [self.total_mass * g_x + F_f_base + squares @ cos_q,
+                                                       self.total_mass * g_y + F_base + squares @ sin_q]])
         return solve(self._free_mass_matrix(M_links, arm, cos_q, sin_q), forcing)
 
     def loads(self, points: list[int], forces: list[float]) -> np.ndarray:
         """The force each link carries (n,): link i (from 0) carries the forces of the points
         k > i (point k, 1..n, is the end of link k and moves with the links up to it). A free
-        chain's base carries every point's force, ahead of the links (n + 1,); point 0, the
+        chain's base carries every point's force, after the links (n + 1,); point 0, the
         base, moves with it alone."""
-        offset = 1 if self.free else 0
-        carried = np.zeros(len(self.L) + offset)
+        n = len(self.L)
+        carried = np.zeros(n + 1 if self.free else n)
         for k, force in zip(points, forces):
-            carried[:k + offset] += force
+            carried[:k] += force
+        if self.free:
+            carried[n] = sum(forces)
         return carried
 
     def point(self, q: np.ndarray, u: np.ndarray, k: int) -> tuple[float, float, float, float]:
@@ -200,29 +193,29 @@ class ChainModel:
         chain's): sums over the links up to it, from the base. q and u may hold samples, of
         shape (dof, N); for one state (the right-hand side and the events ask for one at every
         evaluation) the sums are taken over plain floats."""
-        b = self.base
+        n = len(self.L)
         if q.ndim == 1:
             if self.free:
-                x, y, v_x, v_y = float(q[0]), float(q[1]), float(u[0]), float(u[1])
+                x, y, v_x, v_y = float(q[n]), float(q[n + 1]), float(u[n]), float(u[n + 1])
             else:
                 x = y = v_x = v_y = 0.0
-            for L, q_i, u_i in zip(self.L[:k].tolist(), q[b:b + k].tolist(), u[b:b + k].tolist()):
+            for L, q_i, u_i in zip(self.L[:k].tolist(), q[:k].tolist(), u[:k].tolist()):
                 cos_q, sin_q = math.cos(q_i), math.sin(q_i)
                 x, y = x + L * cos_q, y + L * sin_q
                 v_x, v_y = v_x - L * u_i * sin_q, v_y + L * u_i * cos_q
             return x, y, v_x, v_y
-        L, angles, rates = self.L[:k, None], q[b:b + k], u[b:b + k]
+        L, angles, rates = self.L[:k, None], q[:k], u[:k]
         x, y = (L * np.cos(angles)).sum(0), (L * np.sin(angles)).sum(0)
         v_x, v_y = (-L * rates * np.sin(angles)).sum(0), (L * rates * np.cos(angles)).sum(0)
         if self.free:
-            return x + q[0], y + q[1], v_x + u[0], v_y + u[1]
+            return x + q[n], y + q[n + 1], v_x + u[n], v_y + u[n + 1]
         return x, y, v_x, v_y
 
     def height_and_rate(self, q: np.ndarray, u: np.ndarray, k: int) -> tuple[float, float]:
         """y and v_y of point k for one state: what its contact events need."""
-        b = self.base
-        y, v_y = (float(q[1]), float(u[1])) if self.free else (0.0, 0.0)
-        for L, q_i, u_i in zip(self.L[:k].tolist(), q[b:b + k].tolist(), u[b:b + k].tolist()):
+        n = len(self.L)
+        y, v_y = (float(q[n + 1]), float(u[n + 1])) if self.free else (0.0, 0.0)
+        for L, q_i, u_i in zip(self.L[:k].tolist(), q[:k].tolist(), u[:k].tolist()):
             y += L * math.sin(q_i)
             v_y += L * u_i * math.cos(q_i)
         return y, v_y
@@ -231,7 +224,7 @@ class ChainModel:
                        held: list[int]) -> np.ndarray:
         """The tangential forces at the points `held` (indices k) that keep their v_x at zero
         together, the chain carrying the other forces F and F_f (`loads`). With A the rows
-        a_k = (-L_i sin q_i for i < k, 0 beyond), led by (1, 0) for a free chain's base,
+        a_k = (-L_i sin q_i for i < k, 0 beyond), then (1, 0) for a free chain's base,
         d(v_x)/dt = A du/dt - c = 0 with c_k = sum_{i<k} L_i cos(q_i) u_i^2, and
         du/dt = free + M^-1 A^T F_hold. Two held points
         on one nearly horizontal link make A M^-1 A^T nearly singular: holding both exactly
@@ -239,10 +232,10 @@ class ChainModel:
         symmetric A M^-1 A^T with the cut-off HOLD_RCOND on its eigenvalues drops that direction
         (the least-squares solution: the smallest forces that hold the rest); for one held
         point it is the plain quotient."""
-        n, b = len(self.L), self.base
-        angles, rates = q[b:], u[b:]
-        lead = [1.0, 0.0] if self.free else []
-        A = np.array([[*lead, *np.where(np.arange(n) < k, -self.L * np.sin(angles), 0.0)] for k in held])
+        n = len(self.L)
+        angles, rates = q[:n], u[:n]
+        base = [1.0, 0.0] if self.free else []
+        A = np.array([[*np.where(np.arange(n) < k, -self.L * np.sin(angles), 0.0), *base] for k in held])
         c = np.array([np.sum((self.L * np.cos(angles) * rates ** 2)[:k]) for k in held])
         free = self.accelerations(q, u, F, F_f)
         per_newton = np.linalg.solve(self.mass_matrix(q), A.T)  # du/dt per newton at each held point
@@ -253,15 +246,15 @@ class ChainModel:
     def energies(self, q: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Kinetic energy per link (n, N) and potential energy (N,) for samples q, u (dof, N):
         each link's centre moves with the base (a free chain's) and the links before it."""
-        n, b = len(self.L), self.base
+        n = len(self.L)
         samples = q.shape[1]
         T = np.empty((n, samples))
         V = np.zeros(samples)
-        x, y = (q[0].copy(), q[1].copy()) if self.free else (np.zeros(samples), np.zeros(samples))
-        vx, vy = (u[0].copy(), u[1].copy()) if self.free else (np.zeros(samples), np.zeros(samples))
+        x, y = (q[n].copy(), q[n + 1].copy()) if self.free else (np.zeros(samples), np.zeros(samples))
+        vx, vy = (u[n].copy(), u[n + 1].copy()) if self.free else (np.zeros(samples), np.zeros(samples))
         g_x, g_y = self.gravity_vector
         for j in range(n):
-            L, q_j, u_j = self.L[j], q[b + j], u[b + j]
+            L, q_j, u_j = self.L[j], q[j], u[j]
             vcx = vx - L / 2 * u_j * np.sin(q_j)
             vcy = vy + L / 2 * u_j * np.cos(q_j)
             T[j] = 0.5 * self.m[j] * (vcx ** 2 + vcy ** 2) + 0.5 * self.inertia[j] * u_j ** 2

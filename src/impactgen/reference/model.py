@@ -43,17 +43,18 @@ class PointForce:
 
 def surface_height(scene: Scene, body: Body | None = None) -> float:
     """y_s: the scene's surface.height, or (surface.height = "initial") the height of the
-    lowest contact point at the start: the chain's end for a pinned chain hanging from its
-    pivot, the lowest of the base, the joints and the tip for a free chain."""
+    lowest contact point at the start: the chain's end for a pinned chain (its lowest point,
+    as the scene's checks make it), the lowest of the base, the joints and the tip for a free
+    chain. Read from `body`, which a test may start elsewhere than the scene says."""
     if scene.surface_height is not None:
         return scene.surface_height
     body = body or Body()
     y = body.base_position[1] if body.free else 0.0
-    heights = [y] if body.free else []
+    heights = [y]
     for L, q in zip(scene.chain.length, scene.q0):
         y += L * math.sin(q)
         heights.append(y)
-    return min(heights)
+    return min(heights) if body.free else heights[-1]
 
 
 def reachable_joints(scene: Scene, y_s: float, free: bool = False) -> list[int]:
@@ -99,8 +100,8 @@ class ReferenceModel:
         n = self.n
         integrated = (("W_normal", "W_friction", "P_normal", "P_friction") if self.friction_state
                       else ("W_normal", "P_normal"))  # the works, then the impulses
-        base = (("x0", "y0"), ("u0x", "u0y")) if self.chain.free else ((), ())
-        return (*base[0], *(f"q{i + 1}" for i in range(n)), *base[1], *(f"u{i + 1}" for i in range(n)),
+        base = (("x_0", "y_0"), ("u_x0", "u_y0")) if self.chain.free else ((), ())
+        return (*(f"q{i + 1}" for i in range(n)), *base[0], *(f"u{i + 1}" for i in range(n)), *base[1],
                 *integrated)
 
     @classmethod
@@ -116,7 +117,7 @@ class ReferenceModel:
                    scene.contact.friction > 0, joints, base, body)
 
     def initial_state(self, scene: Scene) -> np.ndarray:
-        """The state at t = 0: the positions and speeds (the base's first for a free chain),
+        """The state at t = 0: the positions and speeds (the base's after the angles for a free chain),
         the works and impulses at zero."""
         positions, speeds = self.body.start(scene)
         return np.concatenate([positions, speeds, np.zeros(self.nstate - 2 * self.dof)])
@@ -217,7 +218,7 @@ class ReferenceModel:
             out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d) for d in delta_k])
         if self.base is not None:
             base = self.base
-            x_0, y_0, v_0x, v_0y = q[0], q[1], u[0], u[1]
+            x_0, y_0, v_0x, v_0y = q[n], q[n + 1], u[n], u[n + 1]
             delta_0 = base.contact.y_s - y_0
             out.update({"x_base": x_0, "y_base": y_0, "v_base_x": v_0x, "v_base_y": v_0y, "delta_base": delta_0,
                         "F_base": np.array([base.contact.normal_force(base.phase, d) for d in delta_0])})

@@ -64,7 +64,7 @@ class ReferenceResult(SimulationResult):
         """The works of each point's own forces over the run, by point name ("base" of a free
         chain, "joint 1", ..., "tip"), as {"W_normal": J, "W_friction": J}; their sums are the run's W_normal and
         W_friction (every contact force acts within an impact of its point)."""
-        first = 0 if "x0" in self.trajectory.state_names else 1  # a free chain's base is point 0
+        first = 0 if "x_0" in self.trajectory.state_names else 1  # a free chain's base is point 0
         works = {point_name(k, self.n): {"W_normal": 0.0, "W_friction": 0.0} for k in range(first, self.n + 1)}
         for impact in self.impacts:
             works[impact.point]["W_normal"] += impact.W_normal_point

@@ -73,17 +73,17 @@ def under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[in
     from a free chain's base at y_0 (point 0, then checked too). The first sample where a point
     lies deeper below the surface than FLOOR_DEPTH of the shortest link, and the message naming
     it; None if none."""
-    n, b = model.n, model.chain.base
-    heights = np.cumsum(model.chain.L[:, None] * np.sin(y[:, b:b + n].T), axis=0)
-    if b:  # every point moves with the base, itself point 0
-        heights = np.vstack([np.zeros(len(t)), heights]) + y[:, 1]
+    n, free = model.n, model.chain.free
+    heights = np.cumsum(model.chain.L[:, None] * np.sin(y[:, :n].T), axis=0)
+    if free:  # every point moves with the base, itself point 0
+        heights = np.vstack([np.zeros(len(t)), heights]) + y[:, n + 1]
     heights = heights - model.contact.y_s
     below = heights < -FLOOR_DEPTH * model.chain.L.min()
     hits = np.flatnonzero(below.any(axis=0))
     if not len(hits):
         return None
     k = int(hits[0])
-    point = int(np.flatnonzero(below[:, k])[0]) + 1 - (1 if b else 0)  # its index k: 0 the base, n the tip
+    point = int(np.flatnonzero(below[:, k])[0]) + (0 if free else 1)  # its index: 0 the base, n the tip
     name = "the tip" if point == n else ("the base" if point == 0 else f"joint {point}")
     return k, (f"{name} is {-heights[point, k]:.3g} m below the surface at t = {t[k]:.6g} s (deeper than "
                f"{100 * FLOOR_DEPTH:g} % of the shortest link, beyond any contact's depth): the chain went "
