@@ -38,9 +38,10 @@ def terminal(fn: Event, direction: int) -> Event:
 
 def segment_events(model: ReferenceModel, y: np.ndarray) -> dict[str, Event]:
     """The events of every point, by name, for a segment that begins at state `y`: point n's
-    first, then the joints' (the C engine's order, so that simultaneous roots resolve alike)."""
+    first, then the joints', then a free chain's base (the C engine's order for the first two,
+    so that simultaneous roots resolve alike)."""
     events = {}
-    for point in (model.tip, *model.joints):
+    for point in (model.tip, *model.joints, *([model.base] if model.base else [])):
         start = model.delta_and_rate(y, point)[0] if point.phase == "free" else 0.0
         own = {**contact_events(model, point, start), **friction_events(model, point)}
         events.update({event_name(point, name): event for name, event in own.items()})

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..results import point_name
 from ..scene import TOUCH_TOLERANCE, Scene
+from .body import Body
 from .chain import ChainModel
 from .contact import Contact
 
@@ -21,8 +22,8 @@ if TYPE_CHECKING:
 class ContactPoint:
     """A point of the chain that can touch the surface, with its own laws and state."""
 
-    index: int  # k = 1..n: the end of link k (joint k; n: the chain's end, the scene's tip)
-    name: str  # "joint k" or "tip" (results.point_name)
+    index: int  # k = 1..n: the end of link k (joint k; n: the chain's end, the scene's tip); 0: a free base
+    name: str  # "joint k" or "tip" (results.point_name), or "base"
     contact: Contact  # its material constants (its own radius) and the state fixed at its switches
     phase: str = "free"
     impact: "PointImpact | None" = None  # the impact it is in, if any
@@ -40,18 +41,28 @@ class PointForce:
     held: bool  # its F_f is the force that holds it still (exact Coulomb, stuck)
 
 
-def surface_height(scene: Scene) -> float:
+def surface_height(scene: Scene, body: Body | None = None) -> float:
     """y_s: the scene's surface.height, or (surface.height = "initial") the height of the
-    chain's end at the start."""
+    lowest contact point at the start: the chain's end for a pinned chain (its lowest point,
+    as the scene's checks make it), the lowest of the base, the joints and the tip for a free
+    chain. Read from `body`, which a test may start elsewhere than the scene says."""
     if scene.surface_height is not None:
         return scene.surface_height
-    return sum(L * math.sin(q) for L, q in zip(scene.chain.length, scene.q0))
+    body = body or Body()
+    y = body.base_position[1] if body.free else 0.0
+    heights = [y]
+    for L, q in zip(scene.chain.length, scene.q0):
+        y += L * math.sin(q)
+        heights.append(y)
+    return min(heights) if body.free else heights[-1]
 
 
-def reachable_joints(scene: Scene, y_s: float) -> list[int]:
+def reachable_joints(scene: Scene, y_s: float, free: bool = False) -> list[int]:
     """The joints (k = 1..n-1) that can reach the surface: the chain up to joint k is at least
-    as long as the pivot is high above the surface (with the start's rounding). The chain's
-    end is always carried: the scene's surface is placed for it."""
+    as long as the pivot is high above the surface (with the start's rounding); every joint
+    of a free chain. The chain's end is always carried: the scene's surface is placed for it."""
+    if free:
+        return list(range(1, scene.n))
     slack = TOUCH_TOLERANCE * max(1.0, sum(scene.chain.length))
     reach = np.cumsum(scene.chain.length)
     return [k for k in range(1, scene.n) if reach[k - 1] >= -y_s - slack]
@@ -59,19 +70,24 @@ def reachable_joints(scene: Scene, y_s: float) -> list[int]:
 
 @dataclass
 class ReferenceModel:
-    """The chain and its contact points: the joints that can reach the surface (`joints`) and
-    point n, the chain's end (the scene's tip), whose laws are `contact`. Every point has its
-    own laws, phase (`ContactPoint.phase`) and state, and acts through its own Jacobian."""
+    """The chain and its contact points: a free chain's base (`base`, point 0), the joints
+    that can reach the surface (`joints`) and point n, the chain's end (the scene's tip),
+    whose laws are `contact`. Every point has its own laws, phase (`ContactPoint.phase`) and
+    state, and acts through its own Jacobian."""
 
     chain: ChainModel
     contact: Contact  # the laws of point n
     n: int
     friction_state: bool  # the state carries W_friction
     joints: list[ContactPoint] = field(default_factory=list)
+    base: ContactPoint | None = None  # a free chain's point 0
+    body: Body = field(default_factory=Body)
 
     def __post_init__(self) -> None:
-        self.points = [*self.joints, ContactPoint(self.n, point_name(self.n, self.n), self.contact)]  # by index
-        self.nstate = 2 * self.n + (4 if self.friction_state else 2)  # q, u, the works, the impulses
+        tip = ContactPoint(self.n, point_name(self.n, self.n), self.contact)
+        self.points = [*([self.base] if self.base else []), *self.joints, tip]  # by index
+        self.dof = self.chain.dof  # the positions: the angles, after the base's coordinates if free
+        self.nstate = 2 * self.dof + (4 if self.friction_state else 2)  # positions, speeds, works, impulses
 
     @property
     def tip(self) -> ContactPoint:
@@ -84,15 +100,27 @@ class ReferenceModel:
         n = self.n
         integrated = (("W_normal", "W_friction", "P_normal", "P_friction") if self.friction_state
                       else ("W_normal", "P_normal"))  # the works, then the impulses
-        return (*(f"q{i + 1}" for i in range(n)), *(f"u{i + 1}" for i in range(n)), *integrated)
+        base = (("x_0", "y_0"), ("u_x0", "u_y0")) if self.chain.free else ((), ())
+        return (*(f"q{i + 1}" for i in range(n)), *base[0], *(f"u{i + 1}" for i in range(n)), *base[1],
+                *integrated)
 
     @classmethod
-    def from_scene(cls, scene: Scene) -> "ReferenceModel":
-        y_s = surface_height(scene)
+    def from_scene(cls, scene: Scene, body: Body | None = None) -> "ReferenceModel":
+        """The model of `scene`; `body` (the base and the surface's angle) as the scene's keys
+        give it when None."""
+        body = body or Body.from_scene(scene)
+        y_s = surface_height(scene, body)
         joints = [ContactPoint(k, point_name(k, scene.n), Contact.from_scene(scene, y_s, scene.joint_radii[k - 1]))
-                  for k in reachable_joints(scene, y_s)]
-        return cls(ChainModel.from_scene(scene), Contact.from_scene(scene, y_s), scene.n,
-                   scene.contact.friction > 0, joints)
+                  for k in reachable_joints(scene, y_s, body.free)]
+        base = ContactPoint(0, point_name(0, scene.n), Contact.from_scene(scene, y_s, body.base_radius)) if body.free else None
+        return cls(ChainModel.from_scene(scene, body.free, body.slope), Contact.from_scene(scene, y_s), scene.n,
+                   scene.contact.friction > 0, joints, base, body)
+
+    def initial_state(self, scene: Scene) -> np.ndarray:
+        """The state at t = 0: the positions and speeds (the base's after the angles for a free chain),
+        the works and impulses at zero."""
+        positions, speeds = self.body.start(scene)
+        return np.concatenate([positions, speeds, np.zeros(self.nstate - 2 * self.dof)])
 
     def touching(self) -> list[ContactPoint]:
         """The points in contact (in a phase other than free), by index."""
@@ -100,11 +128,11 @@ class ReferenceModel:
 
     def kinematics(self, y: np.ndarray, point: ContactPoint) -> tuple[float, float, float, float]:
         """x, y, v_x, v_y of a contact point."""
-        return self.chain.point(y[:self.n], y[self.n:2 * self.n], point.index)
+        return self.chain.point(y[:self.dof], y[self.dof:2 * self.dof], point.index)
 
     def delta_and_rate(self, y: np.ndarray, point: ContactPoint) -> tuple[float, float]:
         """The penetration of a point and its rate."""
-        y_k, v_y = self.chain.height_and_rate(y[:self.n], y[self.n:2 * self.n], point.index)
+        y_k, v_y = self.chain.height_and_rate(y[:self.dof], y[self.dof:2 * self.dof], point.index)
         return point.contact.y_s - y_k, -v_y
 
     def rhs(self, t: float, y: np.ndarray, phase: str | None = None) -> np.ndarray:
@@ -118,7 +146,7 @@ class ReferenceModel:
         F = self.chain.loads(indices, [a.F for a in active])
         F_f = self.chain.loads(indices, [a.F_f for a in active])
         own = [self.integrands(a) for a in active]
-        total = [sum(rates) for rates in zip(*own)] if own else [0.0] * (self.nstate - 2 * self.n)
+        total = [sum(rates) for rates in zip(*own)] if own else [0.0] * (self.nstate - 2 * self.dof)
         parts = [self.chain_rates(t, y, F, F_f), total]
         if len(y) > self.nstate:  # each point's own, in the order of `points`
             parts += own
@@ -127,7 +155,7 @@ class ReferenceModel:
     def chain_rates(self, t: float, y: np.ndarray, F: np.ndarray, F_f: np.ndarray) -> np.ndarray:
         """dq/dt and du/dt of the chain under the normal and friction loads each link carries
         (`ChainModel.loads`)."""
-        n = self.n
+        n = self.dof
         q, u = y[:n], y[n:2 * n]
         return np.concatenate([u, self.chain.accelerations(q, u, F, F_f)])
 
@@ -154,7 +182,7 @@ class ReferenceModel:
             active.append(PointForce(p, F, 0.0 if held else p.contact.friction(F, v_x), v_x, v_y, held))
         held = [a for a in active if a.held]
         if held:
-            n = self.n
+            n = self.dof
             indices = [a.point.index for a in active]
             hold = self.chain.holding_forces(y[:n], y[n:2 * n], self.chain.loads(indices, [a.F for a in active]),
                                              self.chain.loads(indices, [a.F_f for a in active]),
@@ -170,9 +198,11 @@ class ReferenceModel:
     def outputs(self, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
         """The outputs at samples y (N, nstate), as the C engine names them: point n's position,
         speed, penetration and forces (x_B, ..., F, F_f: the tip's), the energies, and each
-        joint's penetration and normal force (delta_Jk, F_Jk)."""
-        n, tip = self.n, self.tip
-        q, u = y[:, :n].T, y[:, n:2 * n].T
+        joint's penetration and normal force (delta_Jk, F_Jk); a free chain's base point's
+        position, speed, penetration and normal force (x_base, y_base, v_base_x, v_base_y,
+        delta_base, F_base)."""
+        n, tip, dof = self.n, self.tip, self.dof
+        q, u = y[:, :dof].T, y[:, dof:2 * dof].T
         x_B, y_B, v_Bx, v_By = self.chain.point(q, u, n)
         delta = tip.contact.y_s - y_B
         F = np.array([tip.contact.normal_force(tip.phase, d) for d in delta])
@@ -186,4 +216,10 @@ class ReferenceModel:
             delta_k = p.contact.y_s - self.chain.point(q, u, p.index)[1]
             out[f"delta_J{p.index}"] = delta_k
             out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d) for d in delta_k])
+        if self.base is not None:
+            base = self.base
+            x_0, y_0, v_0x, v_0y = q[n], q[n + 1], u[n], u[n + 1]
+            delta_0 = base.contact.y_s - y_0
+            out.update({"x_base": x_0, "y_base": y_0, "v_base_x": v_0x, "v_base_y": v_0y, "delta_base": delta_0,
+                        "F_base": np.array([base.contact.normal_force(base.phase, d) for d in delta_0])})
         return out

@@ -52,7 +52,8 @@ class ReferenceResult(SimulationResult):
     def impacts(self) -> list[Impact]:
         """The impacts (their energies from the samples), each with its point's own values."""
         impacts = SimulationResult.impacts.func(self)
-        names = self.trajectory.state_names[2 * self.n:]  # the works, then the impulses
+        names = self.trajectory.state_names
+        names = names[names.index("W_normal"):]  # the works, then the impulses
         if self.several_points:  # a single point: its own values are the totals, as made already
             for impact in impacts:
                 impact.use_own_values(names)
@@ -60,10 +61,11 @@ class ReferenceResult(SimulationResult):
 
     @property
     def point_works(self) -> dict[str, dict[str, float]]:
-        """The works of each point's own forces over the run, by point name ("joint 1", ...,
-        "tip"), as {"W_normal": J, "W_friction": J}; their sums are the run's W_normal and
+        """The works of each point's own forces over the run, by point name ("base" of a free
+        chain, "joint 1", ..., "tip"), as {"W_normal": J, "W_friction": J}; their sums are the run's W_normal and
         W_friction (every contact force acts within an impact of its point)."""
-        works = {point_name(k, self.n): {"W_normal": 0.0, "W_friction": 0.0} for k in range(1, self.n + 1)}
+        first = 0 if "x_0" in self.trajectory.state_names else 1  # a free chain's base is point 0
+        works = {point_name(k, self.n): {"W_normal": 0.0, "W_friction": 0.0} for k in range(first, self.n + 1)}
         for impact in self.impacts:
             works[impact.point]["W_normal"] += impact.W_normal_point
             works[impact.point]["W_friction"] += impact.W_friction_point
@@ -78,7 +80,7 @@ class PointIntegrals:
 
     def __init__(self, model: "ReferenceModel"):
         self.model = model
-        self.width = model.nstate - 2 * model.n
+        self.width = model.nstate - 2 * model.dof
         self.sums = {id(p): np.zeros(self.width) for p in model.points}
 
     def extra_states(self, touching: list["ContactPoint"]) -> int:
@@ -86,7 +88,7 @@ class PointIntegrals:
 
     def at(self, touching: list["ContactPoint"], y_begin: np.ndarray, row: np.ndarray) -> dict[int, np.ndarray]:
         """The sums at a sample `row` (the extended state) of a segment that began at `y_begin`."""
-        n, sums = self.model.n, dict(self.sums)
+        n, sums = self.model.dof, dict(self.sums)
         base = self.model.nstate
         if len(touching) == 1:
             p = touching[0]

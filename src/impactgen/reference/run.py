@@ -69,18 +69,22 @@ class _Recorder:
 
 
 def under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[int, str] | None:
-    """The floor net, written again from the chain: point k's height is sum_{i <= k} L_i sin q_i.
-    The first sample where a point lies deeper below the surface than FLOOR_DEPTH of the
-    shortest link, and the message naming it; None if none."""
-    n = model.n
-    heights = np.cumsum(model.chain.L[:, None] * np.sin(y[:, :n].T), axis=0) - model.contact.y_s
+    """The floor net, written again from the chain: point k's height is sum_{i <= k} L_i sin q_i,
+    from a free chain's base at y_0 (point 0, then checked too). The first sample where a point
+    lies deeper below the surface than FLOOR_DEPTH of the shortest link, and the message naming
+    it; None if none."""
+    n, free = model.n, model.chain.free
+    heights = np.cumsum(model.chain.L[:, None] * np.sin(y[:, :n].T), axis=0)
+    if free:  # every point moves with the base, itself point 0
+        heights = np.vstack([np.zeros(len(t)), heights]) + y[:, n + 1]
+    heights = heights - model.contact.y_s
     below = heights < -FLOOR_DEPTH * model.chain.L.min()
     hits = np.flatnonzero(below.any(axis=0))
     if not len(hits):
         return None
     k = int(hits[0])
-    point = int(np.flatnonzero(below[:, k])[0])
-    name = "the tip" if point == n - 1 else f"joint {point + 1}"
+    point = int(np.flatnonzero(below[:, k])[0]) + (0 if free else 1)  # its index: 0 the base, n the tip
+    name = "the tip" if point == n else ("the base" if point == 0 else f"joint {point}")
     return k, (f"{name} is {-heights[point, k]:.3g} m below the surface at t = {t[k]:.6g} s (deeper than "
                f"{100 * FLOOR_DEPTH:g} % of the shortest link, beyond any contact's depth): the chain went "
                "through the surface")
@@ -95,7 +99,6 @@ class _Run:
         self.started = time.perf_counter()
         self.scene, self.model, self.method, self.integrate = scene, model, method, integrate
         self.engine = engine
-        n = scene.n
         self.rtol = scene.solver.rtol if rtol is None else rtol
         atol_q = scene.solver.atol if atol is None else atol
         self.state_names = model.state_names
@@ -103,7 +106,7 @@ class _Run:
         energy_scale = max(sum(scene.chain.mass) * max(scene.chain.gravity, 1.0) * sum(scene.chain.length), 1e-30)
         self.atol_integrals = atol_q * energy_scale
         self.atol = np.full(self.nstate, atol_q)
-        self.atol[2 * n:] = self.atol_integrals
+        self.atol[2 * model.dof:] = self.atol_integrals
         self.dense_output = dense_output
         self.dense = dense_output or t_eval is not None
         self.sampler = TimeSampler(t_eval) if t_eval is not None else None
@@ -111,7 +114,7 @@ class _Run:
         self.pieces: list = []
         self.t_final = scene.solver.t_end if scene.solver.t_end is not None else scene.solver.t_max
         self.to_separation = scene.solver.t_end is None
-        self.t, self.y = 0.0, np.concatenate([scene.q0, scene.u0, np.zeros(self.nstate - 2 * n)])
+        self.t, self.y = 0.0, model.initial_state(scene)
         self.rec = _Recorder()
         self.integrals = PointIntegrals(model)
         self.impacts: list[PointImpact] = []
