@@ -162,6 +162,8 @@ def _impacts(machine: Machine, records: list[SwitchRecord], at_start: list[str])
             impact.switches.append((t, STATES[state], STATES[next_state]))
         if act & END:
             impact.t_end, impact.i_end = t, sample
+            if machine.rate_law:
+                impact.delta_r = delta_r
     return impacts
 
 

@@ -10,6 +10,9 @@ from ..errors import SceneError
 from ..scene import Scene
 
 YIELD_ONSET = 1.9  # the elastic phase yields at delta = 1.9 delta_c (Jackson-Green's onset)
+# chi(e) of the Hertz laws with hysteresis damping, F = K delta^1.5 (1 + chi v/v0) (docs/contact-laws.md)
+DAMPING = {"hunt-crossley": lambda e: 1.5 * (1 - e), "lankarani-nikravesh": lambda e: 0.75 * (1 - e * e),
+           "flores": lambda e: 1.6 * (1 - e) / e, "gonthier": lambda e: (1 - e * e) / e}
 
 
 @dataclass
@@ -33,6 +36,16 @@ class Contact:
     delta_m: float = 0.0
     delta_r: float = 0.0
     R_res: float = 0.0
+    law: str = "three-phase"  # contact.model
+    chi: float = 0.0  # a damped Hertz law's damping factor
+    k: float = 0.0  # kelvin-voigt's spring, N/m
+    c: float = 0.0  # and dashpot, N s/m
+    v0: float = math.inf  # the normal speed at the start of the impact (inf: none, so undamped)
+
+    @property
+    def rate_law(self) -> bool:
+        """Whether the force depends on d(delta)/dt (and may fall to 0 while penetrating)."""
+        return self.law in DAMPING or self.law == "kelvin-voigt"
 
     @classmethod
     def from_scene(cls, scene: Scene, y_s: float, radius: float | None = None) -> "Contact":
@@ -54,7 +67,9 @@ class Contact:
                    mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
                    plastic=scene.contact.model == "three-phase", R_res=R,
                    exact_coulomb=scene.contact.friction_mode == "coulomb" and scene.contact.friction > 0,
-                   frozen=scene.contact.friction_mode == "frozen")
+                   frozen=scene.contact.friction_mode == "frozen", law=scene.contact.model,
+                   chi=DAMPING[scene.contact.model](scene.contact.restitution) if scene.contact.model in DAMPING else 0.0,
+                   k=scene.contact.stiffness or 0.0, c=scene.contact.damping or 0.0)
 
     def hertz(self, delta: float, radius: float) -> float:
         return 4.0 / 3.0 * self.E_star * math.sqrt(radius) * delta ** 1.5 if delta > 0 else 0.0
@@ -68,7 +83,10 @@ class Contact:
         return self.P_c * (math.exp(-0.17 * w ** (5 / 12)) * w ** 1.5
                            + 4 * H_Sy / self.C_j * (1 - math.exp(-(w ** (5 / 9)) / 78)) * w ** 1.1)
 
-    def normal_force(self, phase: str, delta: float) -> float:
+    def normal_force(self, phase: str, delta: float, rate: float = 0.0) -> float:
+        """The force in `phase` at penetration delta, moving into the surface at `rate`."""
+        if self.rate_law:
+            return self.damped(delta, rate) if phase != "free" else 0.0
         if phase == "elastic":
             return self.hertz(delta, self.R)
         if phase == "elastoplastic":
@@ -76,6 +94,21 @@ class Contact:
         if phase in ("restitution", "reloading"):
             return self.hertz(delta - self.delta_r, self.R_res) if self.plastic else self.hertz(delta, self.R)
         return 0.0
+
+    def damped(self, delta: float, rate: float) -> float:
+        """A damped law's force while the point penetrates (0 outside; the dashpot's from the
+        instant of contact, delta = 0)."""
+        if self.law == "kelvin-voigt":
+            return self.k * delta + self.c * rate if delta >= 0 else 0.0
+        if delta <= 0:
+            return 0.0
+        return self.hertz(delta, self.R) * (1 + self.chi * rate / self.v0)
+
+    def force_sign(self, delta: float, rate: float) -> float:
+        """What a damped force has the sign of while penetrating: its zero ends the impact."""
+        if self.law == "kelvin-voigt":
+            return self.k * delta + self.c * rate
+        return 1 + self.chi * rate / self.v0
 
     def friction(self, F: float, v_x: float) -> float:
         """Sliding friction: the regularized sign of v_x, or exact Coulomb's fixed slip sign."""
@@ -98,3 +131,4 @@ class Contact:
 
     def reset(self) -> None:
         self.delta_m, self.delta_r, self.R_res = 0.0, 0.0, self.R
+        self.v0 = math.inf

@@ -70,8 +70,10 @@ def contact_events(model: ReferenceModel, point: ContactPoint, start: float = 0.
     if phase == "elastoplastic":
         return {"max_compression": terminal(rate, -1)}
     if phase == "restitution":
-        return {"separation": terminal(lambda t, y: delta(t, y) - c.delta_r, -1),
-                "reloading": terminal(rate, 1)}
+        events = {"separation": terminal(lambda t, y: delta(t, y) - c.delta_r, -1), "reloading": terminal(rate, 1)}
+        if c.rate_law:  # a damped force falls to 0 while the point still penetrates
+            events["force_zero"] = terminal(lambda t, y: c.force_sign(*model.delta_and_rate(y, point)), -1)
+        return events
     # reloading
     return {"unloading": terminal(rate, -1),
             "passes_delta_m": terminal(lambda t, y: delta(t, y) - c.delta_m, 1)}

@@ -11,6 +11,8 @@ from ..errors import SceneError
 from ..materials import MATERIAL_KEYS, MATERIALS
 from .schema import SCHEMA, all_keys, did_you_mean, split_key
 
+LAW_FIELDS = ("restitution", "stiffness", "damping", "limiting_pressure")  # [contact] keys of the other laws
+
 
 class _KeyHint:
     """An attribute a scene part does not have ends in an AttributeError that names the
@@ -67,6 +69,11 @@ class Contact(_KeyHint):
     friction_eps: float
     # contact.joint_radius as given, one per joint (n - 1); None: every joint has the tip's radius
     joint_radius: tuple[float, ...] | None = None
+    # the other laws' keys (codegen/spec.py LAW_KEYS): None where not given
+    restitution: float | None = None
+    stiffness: float | None = None
+    damping: float | None = None
+    limiting_pressure: float | None = None
 
     _section = "contact"
 
@@ -214,7 +221,9 @@ class Scene(_KeyHint):
                         "friction_eps": self.contact.friction_eps,
                         # left out when not given: the joints then follow rod.tip_radius
                         **({} if self.contact.joint_radius is None
-                           else {"joint_radius": list(self.contact.joint_radius)})},
+                           else {"joint_radius": list(self.contact.joint_radius)}),
+                        **{key: getattr(self.contact, key) for key in LAW_FIELDS
+                           if getattr(self.contact, key) is not None}},
             "initial": {"q": list(self.q0), "u": list(self.u0)},
             "solver": {"method": s.method, "jacobian": s.jacobian_setting, "rtol": s.rtol,
                        "atol": s.atol, "t_end": "separation" if s.t_end is None else s.t_end,
