@@ -116,7 +116,8 @@ def test_kelvin_voigt_jumps_at_contact_and_leaves_while_penetrating(engine):
     assert -s["energy"]["W_normal"] == pytest.approx(s["delta_T"], rel=1e-8)  # delta_T = T0 - Tf
 
 
-PAPER_LAWS = {**{law: {"contact.restitution": 0.5} for law in HERTZ_DAMPED}, "kelvin-voigt": KV}
+PAPER_LAWS = {**{law: {"contact.restitution": 0.5} for law in HERTZ_DAMPED}, "kelvin-voigt": KV,
+              "thornton": {"contact.limiting_pressure": 1.5e9}}
 
 
 @pytest.mark.parametrize("law", sorted(PAPER_LAWS))
@@ -136,3 +137,48 @@ def test_a_key_the_law_does_not_read_is_refused_by_name():
         bar("flores")
     with pytest.raises(SceneError, match="contact.restitution"):
         bar("gonthier", **{"contact.restitution": 0.0})
+
+
+@pytest.mark.parametrize("law", ["kelvin-voigt", "gonthier"])
+def test_an_fmu_of_a_damped_law_validates_and_agrees_with_the_run(law, tmp_path):
+    fmpy = pytest.importorskip("fmpy")
+    from fmpy.validation import validate_fmu
+    from impactgen.fmu import build_fmu
+    scene = impactgen.load_scene(PAPER, overrides={"contact.model": law, **PAPER_LAWS[law]})
+    path = build_fmu(scene, tmp_path / f"{law}.fmu")
+    assert validate_fmu(str(path)) == []
+    names = {v.name for v in fmpy.read_model_description(str(path)).modelVariables}
+    assert set(PAPER_LAWS[law]) <= names  # the law's own keys are the FMU's parameters
+    stop = 1e-3
+    result = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=stop, relative_tolerance=1e-10,
+                               output_interval=stop / 100, output=["u[1]", "u[2]", "W_normal", "delta_r"])
+    run = impactgen.simulate(scene, t_end=stop)
+    last = result[-1]
+    for i in range(2):
+        assert last[f"u[{i + 1}]"] == pytest.approx(run.u[i, -1], rel=1e-6)
+    assert last["W_normal"] == pytest.approx(run.W_normal[-1], rel=1e-6)
+    assert last["delta_r"] == pytest.approx(run.impacts[0].delta_r, rel=1e-6, abs=1e-15)
+
+
+def thornton_restitution(ratio: float) -> float:
+    """Thornton's closed form (J. Appl. Mech. 1997, Eq. 32) of e at v_i = ratio v_y."""
+    r = 1 / ratio
+    return math.sqrt(6 * math.sqrt(3) / 5) * math.sqrt(1 - r * r / 6) * (
+        r / (r + 2 * math.sqrt(6 / 5 - r * r / 5))) ** 0.25
+
+
+P_Y = 1.0e9  # Pa
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_thornton_restitution_follows_the_closed_form(engine):
+    delta_y = (math.pi * P_Y / (2 * E_STAR)) ** 2 * R_TIP
+    v_y = math.sqrt(4 / 5 * K_HERTZ * delta_y ** 2.5 / (M / 3))  # (1/2) m v_y^2 = (2/5) K delta_y^(5/2)
+    for ratio in (2.0, 5.0, 20.0, 100.0):
+        scene = bar("thornton", **{"contact.limiting_pressure": P_Y, "initial.u": [-ratio * v_y / L]})
+        result = impactgen.simulate(scene, engine=engine)
+        assert result.success, result.message
+        s = result.summary
+        assert s["coefficients"]["e_N"] == pytest.approx(thornton_restitution(ratio), rel=1e-6), ratio
+        assert s["delta_r"] > 0
+        assert abs(s["energy"]["residual"]) <= 1e-8 * s["T0"]

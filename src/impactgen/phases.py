@@ -81,7 +81,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     stats = partial(_stats, session.stats_names, counters, segments, reached_end, len(ran.t),
                     time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names), model.state_names) if sampler else None
-    contact = _yield_scales(model, params) if model.spec.plastic else None
+    contact = _yield_scales(model, params) if model.spec.contact_model == "three-phase" else None
     spans = partial(_spans, machine, model.event_names, segments, ran, reached_end)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries, solver)

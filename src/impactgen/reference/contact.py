@@ -41,6 +41,7 @@ class Contact:
     k: float = 0.0  # kelvin-voigt's spring, N/m
     c: float = 0.0  # and dashpot, N s/m
     v0: float = math.inf  # the normal speed at the start of the impact (inf: none, so undamped)
+    p_y: float = 0.0  # thornton's limiting contact pressure, Pa
 
     @property
     def rate_law(self) -> bool:
@@ -65,11 +66,25 @@ class Contact:
         return cls(E_star=E_star, R=R, delta_c=delta_c, P_c=P_c, C_j=C_j,
                    B=0.14 * math.exp(23 * weak.yield_strength / E_star),
                    mu=scene.contact.friction, eps=scene.contact.friction_eps, y_s=y_s,
-                   plastic=scene.contact.model == "three-phase", R_res=R,
+                   plastic=scene.contact.model in ("three-phase", "thornton"), R_res=R,
                    exact_coulomb=scene.contact.friction_mode == "coulomb" and scene.contact.friction > 0,
                    frozen=scene.contact.friction_mode == "frozen", law=scene.contact.model,
                    chi=DAMPING[scene.contact.model](scene.contact.restitution) if scene.contact.model in DAMPING else 0.0,
-                   k=scene.contact.stiffness or 0.0, c=scene.contact.damping or 0.0)
+                   k=scene.contact.stiffness or 0.0, c=scene.contact.damping or 0.0,
+                   p_y=scene.contact.limiting_pressure or 0.0)
+
+    @property
+    def yield_depth(self) -> float:
+        """The penetration where loading leaves Hertz: 1.9 delta_c (Jackson-Green), or
+        Thornton's delta_y = (pi p_y / (2 E*))^2 R, where Hertz's peak pressure reaches p_y."""
+        if self.law == "thornton":
+            return (math.pi * self.p_y / (2 * self.E_star)) ** 2 * self.R
+        return YIELD_ONSET * self.delta_c
+
+    def thornton(self, delta: float) -> float:
+        """Thornton's plastic loading: F = F_y + pi p_y R (delta - delta_y)."""
+        d_y = self.yield_depth
+        return self.hertz(d_y, self.R) + math.pi * self.p_y * self.R * (delta - d_y) if delta > 0 else 0.0
 
     def hertz(self, delta: float, radius: float) -> float:
         return 4.0 / 3.0 * self.E_star * math.sqrt(radius) * delta ** 1.5 if delta > 0 else 0.0
@@ -90,7 +105,7 @@ class Contact:
         if phase == "elastic":
             return self.hertz(delta, self.R)
         if phase == "elastoplastic":
-            return self.jackson_green(delta)
+            return self.thornton(delta) if self.law == "thornton" else self.jackson_green(delta)
         if phase in ("restitution", "reloading"):
             return self.hertz(delta - self.delta_r, self.R_res) if self.plastic else self.hertz(delta, self.R)
         return 0.0
@@ -123,11 +138,25 @@ class Contact:
     def at_maximum_compression(self, delta_m: float, P_m: float) -> None:
         """Fix delta_m, delta_r (Eq. 12, clamped) and R_res (continuity at delta_m)."""
         self.delta_m = delta_m
-        if self.plastic:
+        if self.law == "thornton":
+            self.delta_r = self.thornton_set(delta_m, P_m)
+            self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
+        elif self.plastic:
             self.delta_r = max(0.0, delta_m * (1 - math.sqrt(6.5 / (delta_m / self.delta_c + 5.5))))
             self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
         else:
             self.delta_r, self.R_res = 0.0, self.R
+
+    def thornton_set(self, delta_m: float, P_m: float) -> float:
+        """Thornton's permanent set after a maximum (delta_m, P_m): unloading is Hertzian
+        about R_p = (4 E* / (3 P_m)) ((2 P_m + F_y) / (2 pi p_y))^(3/2) (Thornton 1997, Eq. 9)
+        from the maximum down to delta_p (0 below yield)."""
+        d_y = self.yield_depth
+        if delta_m <= d_y:
+            return 0.0
+        F_y = self.hertz(d_y, self.R)
+        R_p = 4 * self.E_star / (3 * P_m) * ((2 * P_m + F_y) / (2 * math.pi * self.p_y)) ** 1.5
+        return delta_m - (3 * P_m / (4 * self.E_star * math.sqrt(R_p))) ** (2 / 3)
 
     def reset(self) -> None:
         self.delta_m, self.delta_r, self.R_res = 0.0, 0.0, self.R

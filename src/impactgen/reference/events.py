@@ -6,7 +6,6 @@ from typing import Callable
 
 import numpy as np
 
-from .contact import YIELD_ONSET
 from .model import ContactPoint, ReferenceModel
 
 Event = Callable[[float, np.ndarray], float]  # with the attributes solve_ivp reads: terminal, direction
@@ -65,7 +64,7 @@ def contact_events(model: ReferenceModel, point: ContactPoint, start: float = 0.
     if phase == "elastic":
         events = {"max_compression": terminal(rate, -1)}
         if c.plastic:
-            events["yield"] = terminal(lambda t, y: delta(t, y) - YIELD_ONSET * c.delta_c, 1)
+            events["yield"] = terminal(lambda t, y: delta(t, y) - c.yield_depth, 1)
         return events
     if phase == "elastoplastic":
         return {"max_compression": terminal(rate, -1)}

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .contact import YIELD_ONSET, Contact
+from .contact import Contact
 from .events import FRICTION_EVENTS
 from .model import ContactPoint, ReferenceModel
 from .result import PointImpact, PointIntegrals
@@ -44,7 +44,7 @@ def after(phase: str, event: str, contact: Contact) -> str:
     if (phase, event) in TRANSITIONS:
         return TRANSITIONS[(phase, event)]
     # reloading passed delta_m: back onto the loading curve it left
-    return "elastoplastic" if contact.plastic and contact.delta_m >= YIELD_ONSET * contact.delta_c else "elastic"
+    return "elastoplastic" if contact.plastic and contact.delta_m >= contact.yield_depth else "elastic"
 
 
 def segment_label(model: ReferenceModel) -> tuple[str, str]:
