@@ -134,3 +134,74 @@ def friction_sign(v: sm.Expr = v_Bx) -> sm.Expr:
 def friction_force(normal_force: sm.Expr, sign: sm.Expr) -> sm.Expr:
     """Eq. 14: F_f = -mu |F| s, along x, with s the (regularized or exact) sign of v_Bx."""
     return -mu * normal_force * sign
+
+
+# ---- the field's other laws (docs/contact-laws.md), chosen by contact.model ----
+delta_rate = sm.Symbol("delta_rate")  # d(delta)/dt, positive into the surface
+restitution = sm.Symbol("restitution", positive=True)  # e, the damped law's design coefficient
+chi = sm.Symbol("chi", nonnegative=True)  # the damping factor the law gives e
+v_0 = sm.Symbol("v_0", positive=True)  # the point's normal speed at the start of its impact (phase machine)
+stiffness = sm.Symbol("stiffness", positive=True)  # Kelvin-Voigt spring, N/m
+damping = sm.Symbol("damping", nonnegative=True)  # Kelvin-Voigt dashpot, N s/m
+p_y = sm.Symbol("p_y", positive=True)  # Thornton's limiting contact pressure, Pa
+delta_y = sm.Symbol("delta_y", positive=True)  # Thornton: the penetration where p_y is reached
+F_y = sm.Symbol("F_y", positive=True)  # Thornton: the force there
+k_y = sm.Symbol("k_y", positive=True)  # Thornton: the slope pi p_y R of the plastic loading
+
+# chi(e) of F = K delta^1.5 (1 + chi v/v0), each law's own (Machado et al. 2012, Table 1)
+DAMPING_FACTOR = {
+    "hunt-crossley": sm.Rational(3, 2) * (1 - restitution),
+    "lankarani-nikravesh": sm.Rational(3, 4) * (1 - restitution ** 2),
+    "flores": sm.Rational(8, 5) * (1 - restitution) / restitution,
+    "gonthier": (1 - restitution ** 2) / restitution,
+}
+
+
+def damped_hertz_force() -> sm.Expr:
+    """The Hertz law with hysteresis damping: F = K delta^1.5 (1 + chi v/v0)."""
+    return hertz_force() * (1 + chi * delta_rate / v_0)
+
+
+def kelvin_voigt_force() -> sm.Expr:
+    """The linear spring-dashpot: F = k delta + c v."""
+    return stiffness * delta + damping * delta_rate
+
+
+def force_zero(model: str) -> sm.Expr:
+    """What a damped law's force has the sign of while the point penetrates: the force's zero,
+    where the point leaves the surface (the force never pulls)."""
+    if model == "kelvin-voigt":
+        return kelvin_voigt_force()
+    return 1 + chi * delta_rate / v_0
+
+
+def thornton_loading(d: sm.Expr = delta) -> sm.Expr:
+    """Thornton (1997) Eq. 6: past the limiting pressure, F = F_y + pi p_y R (delta - delta_y)."""
+    return F_y + k_y * (d - delta_y)
+
+
+def thornton_residual(d_m: sm.Expr = delta_max) -> sm.Expr:
+    """Thornton's permanent set delta_p after a maximum delta_m (0 below yield): unloading is
+    Hertzian about R_p = (4 E*/(3 F*)) ((2 F* + F_y)/(2 pi p_y))^(3/2) (Eq. 9), through the
+    maximum F* = F_y + pi p_y R (delta_m - delta_y), so delta_m - delta_p =
+    (3 F*/(4 E* R_p^(1/2)))^(2/3). Written in the point's own constants: 4 E*/3 =
+    F_y/(R^(1/2) delta_y^(3/2)) and 2 pi p_y = 2 k_y/R."""
+    F_m = thornton_loading(d_m)
+    K_R = F_y / (sm.sqrt(R) * delta_y ** sm.Rational(3, 2))  # 4/3 E*
+    R_p = K_R / F_m * (R * (2 * F_m + F_y) / (2 * k_y)) ** sm.Rational(3, 2)
+    return sm.Piecewise((0, d_m <= delta_y), (d_m - (F_m / (K_R * sm.sqrt(R_p))) ** sm.Rational(2, 3), True))
+
+
+def law_constants(model: str) -> tuple[tuple[sm.Symbol, sm.Expr], ...]:
+    """The constants a law derives from its scene keys, after the materials' (material_constants)."""
+    if model in DAMPING_FACTOR:
+        return ((chi, DAMPING_FACTOR[model]),)
+    if model == "thornton":
+        return ((delta_y, (sm.pi * p_y / (2 * E_star)) ** 2 * R),
+                (F_y, hertz_force(delta_y)),
+                (k_y, sm.pi * p_y * R))
+    return ()
+
+
+LAW_INPUTS = {**{name: (restitution,) for name in DAMPING_FACTOR}, "kelvin-voigt": (stiffness, damping),
+              "thornton": (p_y,)}  # the scene's inputs each law reads (codegen/parameters.py)

@@ -179,19 +179,7 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
         Named("delta_rate", -v_By, "d(delta)/dt, m/s"),
     )
 
-    cases = [ForceCase("elastic", sm.StrictGreaterThan(delta, 0), _single(law.hertz_force()),
-                       "Hertz elastic compression (Eq. 9)")]
-    if spec.plastic:
-        cases.append(ForceCase("elastoplastic", sm.StrictGreaterThan(delta, 0),
-                               law.jackson_green_steps(),
-                               "Jackson-Green elasto-plastic compression (Eq. 10)"))
-        cases.append(ForceCase("restitution", sm.StrictGreaterThan(delta, law.delta_r),
-                               _single(law.restitution_force()),
-                               "elastic restitution about the permanent deformation (Eq. 11)"))
-    else:  # Hertz only: unloading follows the loading curve
-        cases.append(ForceCase("restitution", sm.StrictGreaterThan(delta, 0), _single(law.hertz_force()),
-                               "Hertz elastic restitution (Eq. 9 unloading)"))
-
+    cases = _force_cases(spec)
     sign = None
     if spec.has_friction:
         sign = law.slip if spec.coulomb else law.s_frozen if spec.frozen else law.friction_sign(TIP["v_Bx"])
@@ -202,12 +190,16 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
         Named("contact", d, "delta = 0: the tip reaches the undeformed surface"),
         Named("max_compression", d_rate, "d(delta)/dt = 0: maximum compression, or reloading"),
     ]
+    if spec.contact_model == "thornton":
+        events.append(Named("yield", d - law.delta_y, "delta = delta_y: the contact pressure reaches p_y"))
+    elif spec.plastic:
+        events.append(Named("yield", d - law.YIELD_ONSET * law.delta_c, "delta = 1.9 delta_c: onset of phase II"))
     if spec.plastic:
-        events += [
-            Named("yield", d - law.YIELD_ONSET * law.delta_c, "delta = 1.9 delta_c: onset of phase II"),
-            Named("separation", d - law.delta_r, "delta = delta_r: the tip leaves the dented surface"),
-        ]
+        events.append(Named("separation", d - law.delta_r, "delta = delta_r: the tip leaves the dented surface"))
     events.append(Named("passes_delta_m", d - delta_m, "delta = delta_m: reloading passes the maximum"))
+    if spec.rate_law:
+        events.append(Named("force_zero", law.force_zero(spec.contact_model),
+                            "the damped force falls to 0: the tip leaves the surface while penetrating"))
     if spec.coulomb:
         events += [
             Named("slip_stops", TIP["v_Bx"], "v_Bx = 0: the slipping tip stops"),
@@ -233,7 +225,8 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     if spec.has_friction:
         impulses.append(Named("P_friction", s.F_f, "friction force: its integral is the tangential impulse, N"))
 
-    used: set[sm.Symbol] = set(machine_symbols(spec)) | ({s.alpha} if spec.inclined else set())
+    used: set[sm.Symbol] = (set(machine_symbols(spec)) | ({s.alpha} if spec.inclined else set())
+                            | set(law.LAW_INPUTS.get(spec.contact_model, ())))
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
         used |= sm.sympify(e).free_symbols
     params = fields(spec.links, spec.friction_law, {str(x) for x in used}, spec.joints,
@@ -245,6 +238,33 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign, tuple(events),
                             tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain, spec),
                             tuple(_point_motion(chain, k) for k in (*spec.joints, spec.links)), point_params)
+
+
+def _force_cases(spec: ModelSpec) -> list[ForceCase]:
+    """The normal force in each phase of the scene's law (contact.model): only that law's."""
+    positive = sm.StrictGreaterThan(law.delta, 0)
+    if spec.contact_model in ("three-phase", "thornton"):
+        if spec.contact_model == "thornton":
+            loading = ForceCase("elastoplastic", positive, _single(law.thornton_loading()),
+                                "Thornton's plastic loading at the limiting pressure p_y")
+        else:
+            loading = ForceCase("elastoplastic", positive, law.jackson_green_steps(),
+                                "Jackson-Green elasto-plastic compression (Eq. 10)")
+        return [ForceCase("elastic", positive, _single(law.hertz_force()), "Hertz elastic compression (Eq. 9)"),
+                loading,
+                ForceCase("restitution", sm.StrictGreaterThan(law.delta, law.delta_r),
+                          _single(law.restitution_force()),
+                          "elastic restitution about the permanent deformation (Eq. 11)")]
+    if spec.rate_law:
+        force = law.kelvin_voigt_force() if spec.contact_model == "kelvin-voigt" else law.damped_hertz_force()
+        what = f"the {spec.contact_model} law"
+        # the dashpot acts from the instant of contact (delta = 0): F jumps to c v0 there
+        touching = sm.GreaterThan(law.delta, 0) if spec.contact_model == "kelvin-voigt" else positive
+        return [ForceCase("elastic", touching, _single(force), f"{what}, compression"),
+                ForceCase("restitution", touching, _single(force), f"{what}, restitution")]
+    # Hertz only: unloading follows the loading curve
+    return [ForceCase("elastic", positive, _single(law.hertz_force()), "Hertz elastic compression (Eq. 9)"),
+            ForceCase("restitution", positive, _single(law.hertz_force()), "Hertz elastic restitution (Eq. 9 unloading)")]
 
 
 def _heights(chain: ChainEquations, spec: ModelSpec) -> tuple[Named, ...]:
@@ -261,7 +281,10 @@ def _heights(chain: ChainEquations, spec: ModelSpec) -> tuple[Named, ...]:
 def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:
     """What the phase machine's switch laws read besides the force laws: E* and R for the
     contact scales and the unloading radius, delta_c for Eq. 12 and the yield onset."""
-    return (law.E_star, law.R) + ((law.delta_c, law.delta_r, law.R_res) if spec.plastic else ())
+    if spec.contact_model == "thornton":
+        return (law.E_star, law.R, law.delta_r, law.R_res, law.delta_y, law.F_y, law.k_y)
+    return (law.E_star, law.R) + ((law.delta_c, law.delta_r, law.R_res) if spec.plastic else ()) + (
+        (law.v_0,) if spec.rate_law else ())
 
 
 def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase, ...],

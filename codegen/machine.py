@@ -34,21 +34,34 @@ class SwitchLaws:
     """The laws the machine applies at switches, printed as C expressions."""
 
     derive: tuple[tuple[str, str], ...]  # (name, C) steps from the materials to the constants
-    residual: str | None  # delta_r from delta_max (Eq. 12), three-phase only
+    residual: str | None  # delta_r from delta_max (Eq. 12; Thornton's delta_p), the plastic laws only
     unloading_radius: str | None  # R_res from delta_max, P_m, delta_r
     yielded: str | None  # reloading past delta_m returns to the elasto-plastic law
+    inputs: tuple[str, ...] = ()  # the law's own scene inputs the derivation reads (p->...)
+    residual_reads: tuple[str, ...] = ("delta_c",)  # the point's constants the residual law reads
+    yielded_reads: tuple[str, ...] = ("delta_m", "delta_c")  # and the yield test
 
 
 def switch_laws(model: ModelExpressions, ccode) -> SwitchLaws:
-    derive = tuple((str(name), ccode(expr)) for name, expr in law.material_constants())
-    if not model.spec.plastic:
-        return SwitchLaws(derive, None, None, None)
+    spec = model.spec
+    steps = law.material_constants() + law.law_constants(spec.contact_model)
+    derive = tuple((str(name), ccode(expr)) for name, expr in steps)
+    own = law.law_constants(spec.contact_model)
+    read = set().union(*(sm.sympify(e).free_symbols for _, e in own))
+    inputs = tuple(str(x) for x in law.LAW_INPUTS.get(spec.contact_model, ()) if x in read)
+    if not spec.plastic:
+        return SwitchLaws(derive, None, None, None, inputs)
     delta_m = sm.Symbol("delta_m")
+    if spec.contact_model == "thornton":
+        return SwitchLaws(derive, residual=ccode(law.thornton_residual()), unloading_radius=ccode(law.unloading_radius()),
+                          yielded=ccode(sm.GreaterThan(delta_m, law.delta_y)), inputs=inputs,
+                          residual_reads=("R", "delta_y", "F_y", "k_y"), yielded_reads=("delta_m", "delta_y"))
     return SwitchLaws(
         derive,
         residual=ccode(law.residual_deformation()),
         unloading_radius=ccode(law.unloading_radius()),
         yielded=ccode(sm.GreaterThan(delta_m, law.YIELD_ONSET * law.delta_c)),
+        inputs=inputs,
     )
 
 

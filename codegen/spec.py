@@ -13,6 +13,18 @@ from dataclasses import asdict, dataclass
 PHASES = ("free", "elastic", "elastoplastic", "restitution", "sustained")
 FRICTION_KINDS = ("none", "regularized", "coulomb", "frozen")
 
+# The normal-contact laws a scene chooses with contact.model (docs/contact-laws.md): the
+# paper's, Hertz's, the four Hertz laws with hysteresis damping F = K delta^1.5 (1 + chi v/v0),
+# the linear spring-dashpot and Thornton's elastic-perfectly plastic law.
+HERTZ_DAMPED = ("hunt-crossley", "lankarani-nikravesh", "flores", "gonthier")
+CONTACT_MODELS = ("three-phase", "hertz", *HERTZ_DAMPED, "kelvin-voigt", "thornton")
+RATE_LAWS = (*HERTZ_DAMPED, "kelvin-voigt")  # the force depends on d(delta)/dt: it may reach 0 while penetrating
+PLASTIC_LAWS = ("three-phase", "thornton")  # yield, a permanent set, unloading about a larger radius
+# The scene keys each law reads beyond the materials (a law refuses the others)
+LAW_KEYS = {**{name: ("contact.restitution",) for name in HERTZ_DAMPED},
+            "kelvin-voigt": ("contact.stiffness", "contact.damping"),
+            "thornton": ("contact.limiting_pressure",)}
+
 # Machine states: contact phases, plus reloading (restitution's law, watching delta_m).
 STATES = ("free", "elastic", "elastoplastic", "restitution", "reloading", "sustained")
 STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplastic",
@@ -38,7 +50,7 @@ class ModelSpec:
     """What the generated C must be able to do; two scenes with equal specs share a build."""
 
     links: int
-    contact_model: str = "three-phase"  # "three-phase" | "hertz"
+    contact_model: str = "three-phase"  # one of CONTACT_MODELS
     friction_law: str = "regularized"  # "none" | "regularized" | "coulomb" (exact stick-slip) | "frozen"
     jacobian: bool = False  # emit the analytic Jacobian (for BDF)
     sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
@@ -52,8 +64,10 @@ class ModelSpec:
     def __post_init__(self) -> None:
         if self.links < 1:
             raise ValueError("links must be >= 1")
-        if self.contact_model not in ("three-phase", "hertz"):
+        if self.contact_model not in CONTACT_MODELS:
             raise ValueError(f"unknown contact model {self.contact_model!r}")
+        if self.jacobian and self.rate_law:
+            raise ValueError(f"the analytic Jacobian does not cover the rate-dependent law {self.contact_model!r}")
         if self.friction_law not in FRICTION_KINDS:
             raise ValueError(f"unknown friction law {self.friction_law!r}")
         first = BASE_POINT if self.free else 1
@@ -86,7 +100,13 @@ class ModelSpec:
 
     @property
     def plastic(self) -> bool:
-        return self.contact_model == "three-phase"
+        """Whether the law yields and leaves a permanent set (the paper's, Thornton's)."""
+        return self.contact_model in PLASTIC_LAWS
+
+    @property
+    def rate_law(self) -> bool:
+        """Whether the normal force depends on d(delta)/dt (a damped law)."""
+        return self.contact_model in RATE_LAWS
 
     @property
     def slug(self) -> str:

@@ -93,6 +93,11 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
 #endif
     }
     impact_scales(p, c->R, o.v_x, o.v_y, fmax(o.delta_rate, 0.0), out[MODEL_OUT_T], y, r->scale);
+#if MODEL_RATE_LAW
+    /* a damped law scales its damping by the normal speed at contact; an impact that starts
+     * with none (resting, grazing) is undamped */
+    c->v_0 = o.delta_rate > 0.0 ? o.delta_rate : INFINITY;
+#endif
 #if MODEL_COULOMB
     r->slip = c->slip = model_arriving_slip(p, point, t, y, o.v_x, o.v_y, o.F);
 #endif
@@ -125,6 +130,9 @@ static void starts_free(model_machine *m, model_params *p, int point, double y_s
 #endif
 #if MODEL_FROZEN
     c->s_frozen = 0.0;
+#endif
+#if MODEL_RATE_LAW
+    c->v_0 = INFINITY;  /* no damping before an impact sets it (the force_zero event stays finite) */
 #endif
 }
 
@@ -194,6 +202,9 @@ static int watch_state(int state, int base, int *events, int *directions)
 #else
         WATCH(MODEL_EVENT_CONTACT, FALLING);  /* Hertz only: delta_r = 0 */
 #endif
+#if MODEL_RATE_LAW
+        WATCH(MODEL_EVENT_FORCE_ZERO, FALLING);  /* a damped force reaches 0 while penetrating */
+#endif
         WATCH(MODEL_EVENT_MAX_COMPRESSION, RISING);
         break;
     case MODEL_MACHINE_RELOADING:
@@ -262,6 +273,8 @@ static int next_state(int state, const int *has, const model_point_contact *pc)
     case MODEL_MACHINE_RESTITUTION:
 #if MODEL_PLASTIC
         return has[MODEL_EVENT_SEPARATION] ? MODEL_MACHINE_FREE : MODEL_MACHINE_RELOADING;
+#elif MODEL_RATE_LAW
+        return has[MODEL_EVENT_CONTACT] || has[MODEL_EVENT_FORCE_ZERO] ? MODEL_MACHINE_FREE : MODEL_MACHINE_RELOADING;
 #else
         return has[MODEL_EVENT_CONTACT] ? MODEL_MACHINE_FREE : MODEL_MACHINE_RELOADING;
 #endif
@@ -356,6 +369,10 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
     }
     if (next == MODEL_MACHINE_FREE) {
         r->t_end = t;
+#if MODEL_RATE_LAW
+        /* a damped law lets go while the point still penetrates: that depth is its set */
+        if (state == MODEL_MACHINE_RESTITUTION) r->delta_r = fmax(o.delta, 0.0);
+#endif
         act |= MODEL_ACT_IMPACT_END | MODEL_ACT_TOLERANCES;
         for (int i = 0; i < MODEL_NSTATE; ++i) r->scale[i] = 1.0;  /* no impact's scales */
         /* the surface is where a point left it after resting on it */

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import phases
 from .build import compile_model
-from .codegen.spec import STATES, ModelSpec
+from .codegen.spec import RATE_LAWS, STATES, ModelSpec
 from .dense import dropped_times_warning
 from .errors import ImpactgenWarning, SceneError, excerpt
 from .results import SimulationResult
@@ -35,8 +35,9 @@ def model_spec(scene: Scene, solver: Solver | None = None) -> ModelSpec:
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
     joints = reachable_joints(scene)
-    # the analytic Jacobian is written for a pinned chain: a free one's runs on difference quotients
-    analytic = solver.jacobian == "analytic" and not scene.free
+    # the analytic Jacobian is written for a pinned chain and a rate-free law: a free chain's,
+    # or a rate-dependent law's, runs on CVODE's difference quotients
+    analytic = solver.jacobian == "analytic" and not scene.free and contact.model not in RATE_LAWS
     return ModelSpec(scene.n, contact.model, friction_law, analytic, sustained, joints,
                      scene.free, scene.surface_angle_deg != 0.0)
 

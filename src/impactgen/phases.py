@@ -81,7 +81,7 @@ def run(model: CompiledModel, scene: Scene, solver: Solver | None = None, t_eval
     stats = partial(_stats, session.stats_names, counters, segments, reached_end, len(ran.t),
                     time.perf_counter() - started)
     sampled = Trajectory(*sampler.gathered(model.nstate, model.output_names), model.state_names) if sampler else None
-    contact = _yield_scales(model, params) if model.spec.plastic else None
+    contact = _yield_scales(model, params) if model.spec.contact_model == "three-phase" else None
     spans = partial(_spans, machine, model.event_names, segments, ran, reached_end)
     return SimulationResult(scene, "c", status, message, trajectory, spans, impacts, stats, sampled, sol, contact,
                             ran.summaries, solver)
@@ -162,6 +162,8 @@ def _impacts(machine: Machine, records: list[SwitchRecord], at_start: list[str])
             impact.switches.append((t, STATES[state], STATES[next_state]))
         if act & END:
             impact.t_end, impact.i_end = t, sample
+            if machine.rate_law:
+                impact.delta_r = delta_r
     return impacts
 
 

@@ -40,6 +40,7 @@ class Machine:
         self.names = {number: point_name(number, spec.links) for number in self.points}
         self.tip = spec.links  # the chain's end: the point whose phases are the run's
         self.tip_index = lib.MODEL_TIP_POINT
+        self.rate_law = spec.rate_law  # a damped law records the depth it lets go at as the impact's delta_r
         # the C machine's labels (model_machine_slip_name) of a point in contact, read once
         in_contact = lib.MODEL_MACHINE_ELASTIC
         self.slip_labels = {slip: model.ffi.string(lib.model_machine_slip_name(in_contact, slip)).decode()

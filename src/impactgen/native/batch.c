@@ -57,7 +57,7 @@ static int other_model(model_params *p, const double *y, const int *slot)
  * (the three-phase law's; NAN for the others, whose impacts the warnings do not judge so). */
 static void contact_of(const model_params *p, int first_point, double *out)
 {
-#if MODEL_PLASTIC
+#if MODEL_PLASTIC && !MODEL_THORNTON
     int k = MODEL_TIP_POINT;
     for (int j = 0; j < MODEL_NCONTACT; ++j) {
         if (model_point_number(j) == first_point) k = j;

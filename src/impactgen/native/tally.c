@@ -155,6 +155,9 @@ void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, c
         if (seg->state != MODEL_MACHINE_FREE && seg->next_state != seg->state) a->first_switches++;
     }
     if (seg->act & MODEL_ACT_IMPACT_END) {
+#if MODEL_RATE_LAW
+        a->now_delta_r = seg->delta_r;  /* a damped law lets go while penetrating: that depth */
+#endif
         fold_impact(a, seg->t - a->now_start, a->ended++ == 0);
         if (a->impacts == 1) {
             ig_read_point(&a->first_end, t_buf[k], y, out);

@@ -6,7 +6,6 @@ from typing import Callable
 
 import numpy as np
 
-from .contact import YIELD_ONSET
 from .model import ContactPoint, ReferenceModel
 
 Event = Callable[[float, np.ndarray], float]  # with the attributes solve_ivp reads: terminal, direction
@@ -66,13 +65,15 @@ def contact_events(model: ReferenceModel, point: ContactPoint, start: float = 0.
     if phase == "elastic":
         events = {"max_compression": terminal(rate, -1)}
         if c.plastic:
-            events["yield"] = terminal(lambda t, y: delta(t, y) - YIELD_ONSET * c.delta_c, 1)
+            events["yield"] = terminal(lambda t, y: delta(t, y) - c.yield_depth, 1)
         return events
     if phase == "elastoplastic":
         return {"max_compression": terminal(rate, -1)}
     if phase == "restitution":
-        return {"separation": terminal(lambda t, y: delta(t, y) - c.delta_r, -1),
-                "reloading": terminal(rate, 1)}
+        events = {"separation": terminal(lambda t, y: delta(t, y) - c.delta_r, -1), "reloading": terminal(rate, 1)}
+        if c.rate_law:  # a damped force falls to 0 while the point still penetrates
+            events["force_zero"] = terminal(lambda t, y: c.force_sign(*model.delta_and_rate(y, point)), -1)
+        return events
     # reloading
     return {"unloading": terminal(rate, -1),
             "passes_delta_m": terminal(lambda t, y: delta(t, y) - c.delta_m, 1)}

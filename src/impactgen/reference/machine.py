@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .contact import YIELD_ONSET, Contact
+from .contact import Contact
 from .events import FRICTION_EVENTS
 from .model import ContactPoint, ReferenceModel
 from .result import PointImpact, PointIntegrals
@@ -22,7 +22,8 @@ STOPPED = 1e-9  # after a contact event, a slip whose v_x (along it) is within t
 TRANSITIONS = {("free", "contact"): "elastic", ("elastic", "yield"): "elastoplastic",
                ("elastic", "max_compression"): "restitution",
                ("elastoplastic", "max_compression"): "restitution",
-               ("restitution", "separation"): "free", ("restitution", "reloading"): "reloading",
+               ("restitution", "separation"): "free", ("restitution", "force_zero"): "free",
+               ("restitution", "reloading"): "reloading",
                ("reloading", "unloading"): "restitution"}
 
 
@@ -43,7 +44,7 @@ def after(phase: str, event: str, contact: Contact) -> str:
     if (phase, event) in TRANSITIONS:
         return TRANSITIONS[(phase, event)]
     # reloading passed delta_m: back onto the loading curve it left
-    return "elastoplastic" if contact.plastic and contact.delta_m >= YIELD_ONSET * contact.delta_c else "elastic"
+    return "elastoplastic" if contact.plastic and contact.delta_m >= contact.yield_depth else "elastic"
 
 
 def segment_label(model: ReferenceModel) -> tuple[str, str]:
@@ -169,9 +170,17 @@ def begin_impact(model: ReferenceModel, point: ContactPoint, phase: str, t: floa
         c.reset()
     integrals.mark(impact, "begin", point)
     impact.own["v_n0"] = -model.delta_and_rate(y, point)[1]
+    fix_impact_speed(model, y, point)
     impacts.append(impact)
     point.phase = phase
     begin_slip(model, y, point)
+
+
+def fix_impact_speed(model: ReferenceModel, y: np.ndarray, point: ContactPoint) -> None:
+    """A damped law scales its damping by the normal speed at the start of the impact; an
+    impact that starts with none (resting, grazing) is undamped."""
+    rate = model.delta_and_rate(y, point)[1]
+    point.contact.v0 = rate if rate > 0 else math.inf
 
 
 def _at_maximum_compression(model: ReferenceModel, point: ContactPoint, phase: str, y: np.ndarray, sample: int,
@@ -194,6 +203,8 @@ def end_impact(model: ReferenceModel, point: ContactPoint, t: float | None, y: n
     impact = point.impact
     if t is not None:
         impact.t_end, impact.i_end = t, sample
+        if point.contact.rate_law:  # a damped law lets go while the point penetrates: its set
+            impact.delta_r = max(model.delta_and_rate(y, point)[0], 0.0)
     integrals.mark(impact, "end", point)
     impact.own["v_n1"] = -model.delta_and_rate(y, point)[1]
     point.impact = None

@@ -177,7 +177,7 @@ class ReferenceModel:
             if phase == "free":
                 continue
             _, y_k, v_x, v_y = self.kinematics(y, p)
-            F = p.contact.normal_force(phase, p.contact.y_s - y_k)
+            F = p.contact.normal_force(phase, p.contact.y_s - y_k, -v_y)
             held = p is still or (p.contact.exact_coulomb and p.contact.slip == 0)
             active.append(PointForce(p, F, 0.0 if held else p.contact.friction(F, v_x), v_x, v_y, held))
         held = [a for a in active if a.held]
@@ -205,7 +205,7 @@ class ReferenceModel:
         q, u = y[:, :dof].T, y[:, dof:2 * dof].T
         x_B, y_B, v_Bx, v_By = self.chain.point(q, u, n)
         delta = tip.contact.y_s - y_B
-        F = np.array([tip.contact.normal_force(tip.phase, d) for d in delta])
+        F = np.array([tip.contact.normal_force(tip.phase, d, -v) for d, v in zip(delta, v_By)])
         out = {"x_B": x_B, "y_B": y_B, "v_Bx": v_Bx, "v_By": v_By, "delta": delta, "delta_rate": -v_By, "F": F}
         if self.friction_state:
             out["F_f"] = np.array([self.friction_force(row, tip) for row in y])
@@ -213,13 +213,14 @@ class ReferenceModel:
         out.update({f"T{i + 1}": T[i] for i in range(n)})
         out["T"], out["V"] = T.sum(0), V
         for p in self.joints:
-            delta_k = p.contact.y_s - self.chain.point(q, u, p.index)[1]
+            _, y_k, _, v_k = self.chain.point(q, u, p.index)
+            delta_k = p.contact.y_s - y_k
             out[f"delta_J{p.index}"] = delta_k
-            out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d) for d in delta_k])
+            out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d, -v) for d, v in zip(delta_k, v_k)])
         if self.base is not None:
             base = self.base
             x_0, y_0, v_0x, v_0y = q[n], q[n + 1], u[n], u[n + 1]
             delta_0 = base.contact.y_s - y_0
             out.update({"x_base": x_0, "y_base": y_0, "v_base_x": v_0x, "v_base_y": v_0y, "delta_base": delta_0,
-                        "F_base": np.array([base.contact.normal_force(base.phase, d) for d in delta_0])})
+                        "F_base": np.array([base.contact.normal_force(base.phase, d, -v) for d, v in zip(delta_0, v_0y)])})
         return out

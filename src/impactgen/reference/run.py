@@ -12,7 +12,7 @@ from ..errors import SceneError, SolverError
 from ..results import PhaseSpan, Ready, Trajectory
 from ..scene import Scene
 from .events import segment_events, split_event
-from .machine import begin_slip, end_impact, normal_start, release_overloaded, segment_label, switch
+from .machine import begin_slip, end_impact, fix_impact_speed, normal_start, release_overloaded, segment_label, switch
 from .model import ContactPoint, ReferenceModel
 from .result import PointImpact, PointIntegrals, ReferenceResult
 from .segment import METHODS, Segment, solve_ivp_segment
@@ -159,6 +159,7 @@ class _Run:
             point.impact = PointImpact(t_start=0.0, i_start=0, point=point.name)
             self.integrals.mark(point.impact, "begin", point)
             point.impact.own["v_n0"] = -model.delta_and_rate(y, point)[1]
+            fix_impact_speed(model, y, point)
             self.impacts.append(point.impact)
         release_overloaded(model, y, self.t)
         self.rec.add(model, np.array([self.t]), y[None, :], segment_label(model)[0])

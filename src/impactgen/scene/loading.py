@@ -10,7 +10,7 @@ from typing import Any, Mapping
 
 from ..errors import SceneError
 from .derived import fill_from_material, link_masses
-from .model import Chain, Contact, Material, Scene, Solver
+from .model import LAW_FIELDS, Chain, Contact, Material, Scene, Solver
 from .overrides import apply_overrides, checked_overrides, tables_copied, tomllib
 from .physics import check_physics
 from .schema import FREE_KEYS, MISSING, SCHEMA, did_you_mean, resolve_jacobian
@@ -73,7 +73,8 @@ def scene_from_dict(raw: Mapping[str, Any], overrides: Mapping[str, Any] | None 
     base0, base_u0 = _base_start(get, sections, base == "free")
     contact = Contact(get("contact", "model"), get("contact", "friction"),
                       get("contact", "friction_mode"), get("contact", "friction_eps"),
-                      get("contact", "joint_radius", n), get("contact", "base_radius"))
+                      get("contact", "joint_radius", n), get("contact", "base_radius"),
+                      *(get("contact", key) for key in LAW_FIELDS))
     q_deg, q_rad = get("initial", "q_deg", n), get("initial", "q", n)
     if (q_deg is None) == (q_rad is None):
         raise SceneError("initial.q", "give exactly one of initial.q (rad) and initial.q_deg")

@@ -11,6 +11,8 @@ from ..errors import SceneError
 from ..materials import MATERIAL_KEYS, MATERIALS
 from .schema import SCHEMA, all_keys, did_you_mean, split_key
 
+LAW_FIELDS = ("restitution", "stiffness", "damping", "limiting_pressure")  # [contact] keys of the other laws
+
 
 class _KeyHint:
     """An attribute a scene part does not have ends in an AttributeError that names the
@@ -70,6 +72,11 @@ class Contact(_KeyHint):
     joint_radius: tuple[float, ...] | None = None
     # contact.base_radius as given (a free chain's); None: the base has the tip's radius
     base_radius: float | None = None
+    # the other laws' keys (codegen/spec.py LAW_KEYS): None where not given
+    restitution: float | None = None
+    stiffness: float | None = None
+    damping: float | None = None
+    limiting_pressure: float | None = None
 
     _section = "contact"
 
@@ -274,7 +281,9 @@ class Scene(_KeyHint):
                         # left out when not given: the joints then follow rod.tip_radius
                         **({} if self.contact.joint_radius is None
                            else {"joint_radius": list(self.contact.joint_radius)}),
-                        **({} if self.contact.base_radius is None else {"base_radius": self.contact.base_radius})},
+                        **({} if self.contact.base_radius is None else {"base_radius": self.contact.base_radius}),
+                        **{key: getattr(self.contact, key) for key in LAW_FIELDS
+                           if getattr(self.contact, key) is not None}},
             "initial": {"q": list(self.q0), "u": list(self.u0),
                         **({"base": list(self.base_start), "base_velocity": list(self.base_velocity)}
                            if self.free else {})},

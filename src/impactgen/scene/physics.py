@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from ..codegen.parameters import broken_rule
+from ..codegen.spec import LAW_KEYS
 from ..codegen.thresholds import THRESHOLD
 from ..errors import SceneError
 from .model import Scene
@@ -24,9 +25,24 @@ def joint_heights(scene: Scene) -> list[float]:
     return heights
 
 
+def check_law_keys(scene: Scene) -> None:
+    """The contact law's own keys: each one it reads is given, none that it does not read."""
+    law = scene.contact.model
+    reads = LAW_KEYS.get(law, ())
+    for key in sorted({k for keys in LAW_KEYS.values() for k in keys}):
+        given = getattr(scene.contact, key.split(".")[1]) is not None
+        if given and key not in reads:
+            uses = f"it reads {', '.join(reads)}" if reads else "it reads none of the other laws' keys"
+            raise SceneError(key, f"contact.model = {law!r} does not use this key ({uses}); remove it "
+                                  "or choose a law that reads it (docs/contact-laws.md)")
+        if not given and key in reads:
+            raise SceneError(key, f"missing: contact.model = {law!r} needs it (docs/contact-laws.md)")
+
+
 def check_physics(scene: Scene) -> None:
     """Checks across keys: yield below modulus; every point of the chain (the joints and the
     tip, each a contact point) may start on the surface, none in it; nor may the pivot."""
+    check_law_keys(scene)
     broken = broken_rule(scene)  # the rules across inputs: one list, which the generated C's start check prints
     if broken:
         raise SceneError(broken[0].key, broken[1])

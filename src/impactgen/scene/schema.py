@@ -12,11 +12,11 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from ..codegen.parameters import PARAMETERS
+from ..codegen.spec import CONTACT_MODELS
 from ..errors import SceneError
 from ..materials import MATERIAL_NAMES
 
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
-CONTACT_MODELS = ("three-phase", "hertz")
 # "frozen": the friction keeps the direction it had at contact start (docs/model.md: the
 # paper's published energy losses; not physical once the tip's tangential speed reverses)
 FRICTION_MODES = ("regularized", "coulomb", "frozen")
@@ -121,6 +121,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "contact": {
         "model": Key("str", "three-phase", choices=CONTACT_MODELS),
+        # the keys of the other laws (docs/contact-laws.md): each law reads its own, refuses the others'
+        "restitution": Key("float", None, _physical("contact.restitution"),
+                           doc="e, the damped Hertz laws' design coefficient of restitution", symbols=("e",)),
+        "stiffness": Key("float", None, _physical("contact.stiffness"), doc="N/m; kelvin-voigt's spring k",
+                         symbols=("k",)),
+        "damping": Key("float", None, _physical("contact.damping"), doc="N s/m; kelvin-voigt's dashpot c",
+                       symbols=("c",)),
+        "limiting_pressure": Key("float", None, _physical("contact.limiting_pressure"),
+                                 doc="Pa; thornton's limiting contact pressure p_y", symbols=("p_y",)),
         "friction": Key("float", check=_physical("contact.friction"),
                         doc="mu, the Coulomb coefficient; 0 for a frictionless surface", symbols=("mu",)),
         "friction_mode": Key("str", "regularized", choices=FRICTION_MODES),

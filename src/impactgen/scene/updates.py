@@ -9,7 +9,7 @@ from typing import Any, Mapping
 from ..codegen.parameters import RULES
 from ..errors import SceneError
 from .loading import scene_from_dict
-from .model import Scene, Solver
+from .model import LAW_FIELDS, Scene, Solver
 from .physics import check_physics
 from .schema import resolve_jacobian, split_key
 from .values import check_split
@@ -27,7 +27,8 @@ _MATERIALS = {"E", "nu", "yield_strength"}  # the keys of a [rod] or [surface] M
 # The keys `check_physics` reads: a case that changes none of them (a speed, a friction
 # coefficient, a solver setting) keeps the base scene's verdict, which was already checked.
 _CROSS_CHECKED = {*(key for rule in RULES for key in (rule.key, rule.above_key)), "surface.height",
-                  "chain.length", "initial.q", "initial.q_deg"}
+                  "chain.length", "initial.q", "initial.q_deg", "contact.model",
+                  *(f"contact.{key}" for key in LAW_FIELDS)}
 
 
 def scene_with(base: Scene, overrides: Mapping[str, Any]) -> Scene:
