@@ -73,12 +73,44 @@ def _compare(args: argparse.Namespace) -> int:
     import impactgen
     from ..compare import format_comparison
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    if args.laws is not None or args.speeds is not None:
+        return _compare_contact_laws(args, scene)
+    if args.out is not None:
+        raise SceneError("--out", "is the figure of --speeds: give --speeds LOW..HIGH[:N]")
     table = impactgen.compare_laws(scene, engine=args.engine)
     if args.json:
         rows = table.to_dict(orient="records")
         print(json.dumps({"scene": scene.name, "rows": [{k: _json_number(v) for k, v in r.items()} for r in rows]}))
     else:
         print("\n".join(format_comparison(table, scene.n)))
+    return 0
+
+
+def _compare_contact_laws(args: argparse.Namespace, scene) -> int:
+    """impactgen compare --laws/--speeds: the contact laws side by side, in C (run_batch)."""
+    from .. import contact_compare as cc
+    if args.engine != "c":
+        raise SceneError("--engine", "compare --laws and --speeds run in C (impactgen.run_batch); "
+                                     "leave out --engine reference")
+    laws = cc.check_laws(args.laws if args.laws is not None else [scene["contact.model"]])
+    speeds = cc.parse_speeds(args.speeds) if args.speeds is not None else None
+    if speeds is None and args.out is not None:
+        raise SceneError("--out", "is the figure of --speeds: give --speeds LOW..HIGH[:N]")
+    table = cc.compare_contact_laws(scene, laws)
+    out = {"scene": scene.name, "rows": [{k: _json_number(v) for k, v in r.items()}
+                                         for r in table.to_dict(orient="records")]}
+    if speeds is not None:
+        frame = cc.speed_sweep(scene, laws, speeds)
+        figure = cc.plot_speed_sweep(frame, args.out or Path(f"{scene.name}-laws.png"),
+                                     f"{scene.name}: first impact against the normal impact speed")
+        out.update({"speeds": cc.speeds_json(frame), "figure": str(figure)})
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"{scene.name}: the first impact under each contact law")
+    print("\n".join(cc.format_law_table(table)))
+    if speeds is not None:
+        print(f"{len(laws)} laws x {len(speeds)} speeds from {speeds[0]:g} to {speeds[-1]:g} m/s: {out['figure']}")
     return 0
 
 

@@ -108,12 +108,23 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--debug", action="store_true", help="show tracebacks")
 
     # -- compare (the rigid-body impact laws beside the compliant run): impactgen.compare
-    cmp = sub.add_parser("compare", help="the rigid-body impact laws beside the compliant run",
+    cmp = sub.add_parser("compare", help="the rigid-body impact laws beside the compliant run, or the "
+                                         "contact laws side by side (--laws)",
                          description="Simulate a scene's first impact, then give its pre-impact state to "
                                      "Newton's, Poisson's and Stronge's energetic law with the coefficients "
-                                     "of restitution the compliant run produced (docs/impact-laws.md).")
+                                     "of restitution the compliant run produced (docs/impact-laws.md). With "
+                                     "--laws: the first impact under each contact law (contact.model), with "
+                                     "e_N, e_E, delta_max, the permanent set delta_r, P_max and the contact "
+                                     "time; --speeds sweeps the normal impact speed (docs/fitting.md).")
     cmp.add_argument("scene", type=Path, help=SCENE_HELP)
     cmp.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    cmp.add_argument("--laws", default=None, metavar="A,B,...",
+                     help="contact laws to run side by side, e.g. three-phase,hertz (any contact.model)")
+    cmp.add_argument("--speeds", default=None, metavar="LOW..HIGH[:N]",
+                     help="sweep the tip's normal impact speed over N (default 10) speeds in m/s and draw "
+                          "e_N, delta_max and the contact time against it (the scene's law without --laws)")
+    cmp.add_argument("--out", type=Path, default=None, metavar="FIG",
+                     help="the --speeds figure (PNG; default <scene name>-laws.png)")
     cmp.add_argument("--json", action="store_true", help="print the rows as one JSON object")
     cmp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     cmp.add_argument("--debug", action="store_true", help="show tracebacks")
