@@ -114,6 +114,24 @@ def _compare_contact_laws(args: argparse.Namespace, scene) -> int:
     return 0
 
 
+def _fit(args: argparse.Namespace) -> int:
+    """impactgen fit: scene keys fitted to measured impacts, with their errors (docs/fitting.md)."""
+    import impactgen
+    from ..fitting.report import fit_json, format_fit, plot_fit
+    scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    out = args.out or Path(f"{scene.name}-fit.png")
+    if out.suffix.lower() != ".png":
+        raise SceneError("--out", f"the figure is a PNG file: give a name ending in .png, got {out}")
+    result = impactgen.fit(scene, args.data, args.fit, laws=args.law)
+    figure = plot_fit(result, out)
+    if args.json:
+        print(json.dumps({**fit_json(result), "figure": str(figure)}))
+    else:
+        print("\n".join(format_fit(result)))
+        print(f"figure of measured against fitted: {figure}")
+    return 0
+
+
 def _json_number(value):
     """NaN and infinities as null (JSON has none), numpy scalars as Python's."""
     value = value.item() if hasattr(value, "item") else value
@@ -360,5 +378,5 @@ def links(args: argparse.Namespace) -> int:
 
 COMMANDS = {"run": _run, "examples": _examples, "sweep": _sweep, "crosscheck": _crosscheck, "plot": _plot,
             "animate": _animate, "stability": _stability, "compare": _compare, "bench": _bench, "fmu": _fmu,
-            "generate": _generate, "paper-table": _paper_table,
+            "generate": _generate, "paper-table": _paper_table, "fit": _fit,
             "materials": _materials}

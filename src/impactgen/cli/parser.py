@@ -129,6 +129,25 @@ def build_parser() -> argparse.ArgumentParser:
     cmp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     cmp.add_argument("--debug", action="store_true", help="show tracebacks")
 
+    fit = sub.add_parser("fit", help="fit scene parameters to measured impacts (least squares, with error bars)",
+                         description="Fit scene keys to the impacts measured in DATA.csv by least squares with "
+                                     "the compiled model (docs/fitting.md). DATA.csv has one row per impact: "
+                                     "columns named by scene keys are its inputs (initial.u[2]), columns named "
+                                     "as a sweep's result columns its measurements (delta_r, t_contact, "
+                                     "u_final[2], coefficients.e_N), sigma:NAME their standard deviations.")
+    fit.add_argument("scene", type=Path, help=SCENE_HELP)
+    fit.add_argument("data", type=Path, metavar="DATA.csv", help="the measured impacts, one row each")
+    fit.add_argument("--fit", required=True, metavar="KEY[=LOW..HIGH],...",
+                     help="the scene keys to fit, each with optional bounds, e.g. "
+                          "rod.yield_strength=3e8..1.1e9,contact.friction=0..1")
+    fit.add_argument("--law", default=None, metavar="A,B,...",
+                     help="contact laws (contact.model) to fit each and rank by AIC (default the scene's)")
+    fit.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    fit.add_argument("--out", type=Path, default=None, metavar="FIG",
+                     help="the figure of measured against fitted values (PNG; default <scene name>-fit.png)")
+    fit.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    fit.add_argument("--debug", action="store_true", help="show tracebacks")
+
     anim = sub.add_parser("animate", help="an animation of the chain over the run (GIF or MP4)",
                           description="Draw the chain moving over the run, the surface, and each contact "
                           "point (every joint, the tip) coloured by its phase. The frames are spread evenly "
