@@ -32,7 +32,7 @@ SPEED_PANELS = {"coefficients.e_N": "e_N (kinematic)", "delta_max": "delta_max (
 DEFAULT_SPEED_COUNT = 10  # speeds of a LOW..HIGH sweep without :N
 
 
-def check_laws(laws: str | Sequence[str]) -> tuple[str, ...]:
+def check_laws(laws: str | Sequence[str], flag: str = "--laws") -> tuple[str, ...]:
     """The laws as a tuple, each one the scene schema accepts (`CONTACT_MODELS`), each once.
 
     Raises
@@ -43,10 +43,10 @@ def check_laws(laws: str | Sequence[str]) -> tuple[str, ...]:
     names = [name.strip() for name in laws.split(",")] if isinstance(laws, str) else [str(v) for v in laws]
     names = [name for name in names if name]
     if not names:
-        raise SceneError("--laws", f"name at least one contact law: {', '.join(CONTACT_MODELS)}")
+        raise SceneError(flag, f"name at least one contact law: {', '.join(CONTACT_MODELS)}")
     for name in names:
         if name not in CONTACT_MODELS:
-            raise SceneError("--laws", f"unknown contact law {name!r}; the scene's contact.model takes "
+            raise SceneError(flag, f"unknown contact law {name!r}; the scene's contact.model takes "
                                        f"{', '.join(CONTACT_MODELS)}")
     return tuple(dict.fromkeys(names))
 

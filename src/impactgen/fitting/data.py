@@ -107,7 +107,7 @@ def read_measurements(data: str | Path | Any, scene: Scene, fitted: Sequence[str
         except FileNotFoundError:
             raise SceneError("DATA", f"no such file: {data}") from None
         except pd.errors.EmptyDataError:
-            raise SceneError("DATA", f"{data} is empty: give a header line and one row per measured impact") from None
+            raise SceneError("DATA", f"{source} is empty: give a header line and one row per measured impact") from None
         except (pd.errors.ParserError, UnicodeDecodeError, OSError) as exc:
             raise SceneError("DATA", f"cannot read {data} as CSV: {excerpt(str(exc))}") from None
     elif hasattr(data, "columns"):

@@ -206,7 +206,7 @@ def check_start(model: _Model, x0: np.ndarray) -> None:
         row = bad.iloc[0]
         reason = str(row["message"]) or ("no impact" if row["status"] == "no-impact" else row["status"])
         raise SceneError("DATA", f"{model.data.source}: the model cannot run row {int(row['case']) + 1} "
-                                 f"(at {model.describe(x0)}): {excerpt(reason, 300)}")
+                                 f"(at {model.describe(x0)}): {reason[:300]}")
 
 
 def fit_law(scene: Scene, law: str, parameters: list[FitParameter], data: Measurements,
@@ -315,7 +315,7 @@ def fit(scene: Scene | str, data: Any, parameters: Any, laws: Any = None, tolera
     from .data import parse_fit, read_measurements
     started = time.perf_counter()
     scene = scene if isinstance(scene, Scene) else load_scene(scene)
-    law_names = check_laws(laws if laws is not None else [scene["contact.model"]])
+    law_names = check_laws(laws if laws is not None else [scene["contact.model"]], "--law")
     fitted = parse_fit(parameters, scene)
     measurements = read_measurements(data, scene, [p.key for p in fitted])
     fits = [fit_law(scene, law, fitted, measurements, tolerance) for law in law_names]
