@@ -54,7 +54,8 @@ def format_fit(result: FitResult) -> list[str]:
         for k, fit in enumerate(result.laws, start=1):
             lines.append(f"  {k:>4} {fit.law:<20} {fit.chi2:12.5g} {fit.aic:12.5g} {fit.aic - best:10.4g}")
     lines += _residual_lines(result.best, data)
-    lines.append(f"{result.impacts} impacts simulated in {result.wall_s:.3g} s")
+    lines.append(f"{result.impacts} impacts simulated; the fit took {result.wall_s:.3g} s, "
+                 f"{result.batch_s:.3g} s of it in run_batch")
     return lines
 
 
@@ -90,7 +91,7 @@ def fit_json(result: FitResult) -> dict[str, Any]:
     best = result.best
     out: dict[str, Any] = {"scene": result.scene_name, "data": result.measurements.source, "law": best.law,
                            **_law_json(best, result.measurements)}
-    out.update({"impacts_simulated": result.impacts, "wall_s": result.wall_s,
+    out.update({"impacts_simulated": result.impacts, "wall_s": result.wall_s, "batch_s": result.batch_s,
                 "weighting": "sigma" if result.sigma_given else "relative"})
     if len(result.laws) > 1:
         out["ranking"] = [{"rank": k, "law": fit.law, "chi2": fit.chi2, "aic": fit.aic,
