@@ -13,6 +13,7 @@ from ..summaries import summary_unit
 from .solve import FitResult, LawFit
 
 ROWS_SHOWN = 40  # the residual table's rows beyond these are left out of the text (all in --json)
+PANELS_ACROSS = 2  # the figure's panels (one per measurement column) per row
 
 
 def parameter_unit(key: str) -> str:
@@ -125,8 +126,12 @@ def plot_fit(result: FitResult, out: Path) -> Path:
     from ..plots import _pyplot
     plt = _pyplot()
     columns = list(result.measurements.measured)
-    fig, axes = plt.subplots(1, len(columns), figsize=(4.2 * len(columns), 4.2), squeeze=False)
-    for ax, column in zip(axes[0], columns):
+    across = min(len(columns), PANELS_ACROSS)
+    down = -(-len(columns) // across)
+    fig, axes = plt.subplots(down, across, figsize=(4.4 * across, 4.0 * down), squeeze=False)
+    for ax in axes.flat[len(columns):]:
+        ax.set_visible(False)
+    for ax, column in zip(axes.flat, columns):
         measured = result.measurements.measured[column]
         sigma = result.measurements.sigma[column] if result.sigma_given else None
         for k, fit in enumerate(result.laws):
@@ -140,6 +145,7 @@ def plot_fit(result: FitResult, out: Path) -> Path:
         unit = f" ({unit})" if unit and unit != "1" else ""
         ax.set_xlabel(f"measured {column}{unit}")
         ax.set_ylabel(f"fitted {column}{unit}")
+        ax.locator_params(axis="x", nbins=5)
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=8)
     fig.suptitle(f"{result.scene_name}: measured against fitted ({result.measurements.source})")
