@@ -62,8 +62,11 @@ def parse_fit(spec: str | Sequence[str] | Mapping[str, Any], scene: Scene) -> li
         if not low < high:
             raise SceneError("--fit", f"{key}: the bounds are reversed or empty: {low:g}..{high:g} (give LOW..HIGH, LOW < HIGH)")
         value = scene[key]  # an unknown key, or an element that is not there, ends here, named
+        if value is None and math.isfinite(high - low):  # a key the scene leaves unset: from its bounds
+            value = _middle(low, high)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SceneError("--fit", f"{key} is {excerpt(value)}, not a number; fit a number of the scene "
+            unset = " (unset: give it in the scene or give bounds LOW..HIGH)" if value is None else ""
+            raise SceneError("--fit", f"{key} is {excerpt(value)}{unset}, not a number; fit a number of the scene "
                                       "(one element of a list: initial.u[2])")
         start = float(value) if low <= value <= high else _middle(low, high)
         parameters.append(FitParameter(key, low, high, start))
