@@ -6,8 +6,10 @@
     result.summary, result.phases, result.t, result.q, result.u
 """
 from .compare import compare_laws
+from .contact_compare import compare_contact_laws
 from .engines import simulate
 from .errors import BuildError, ImpactgenError, ImpactgenWarning, SceneError, SolverError, ValidityWarning
+from .fitting import fit
 from .scene import Scene, load_scene, scene_from_dict
 from .sweep import run_batch, sweep
 
@@ -15,4 +17,5 @@ __version__ = "0.1.0"
 
 
 __all__ = ["BuildError", "ImpactgenError", "ImpactgenWarning", "SceneError", "SolverError", "ValidityWarning", "Scene", "load_scene",
-           "scene_from_dict", "simulate", "sweep", "run_batch", "compare_laws", "__version__"]
+           "scene_from_dict", "simulate", "sweep", "run_batch", "compare_laws",
+           "compare_contact_laws", "fit", "__version__"]

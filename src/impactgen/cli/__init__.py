@@ -11,7 +11,9 @@
     impactgen bench [--quick] [--out DIR] [--parts workprecision,rhs,scaling]
     impactgen stability [--quick] [--json] [--out DIR]
     impactgen compare SCENE [--engine c|reference] [--json] [--set KEY=VALUE ...]
+    impactgen compare SCENE --laws A,B,... [--speeds LOW..HIGH[:N]] [--out FIG] [--json]
     impactgen sweep SCENE --vary KEY=SPEC [...] [--out DIR]
+    impactgen fit SCENE DATA.csv --fit KEY[=LOW..HIGH],... [--law A,B,...] [--json] [--out FIG]
     impactgen fmu SCENE|--links N [--kind me|cs|both] [--out FILE.fmu]
     impactgen paper-table [--engine c|reference] [--json]   the paper's Table 2 beside the published values
     impactgen materials [--json]                the named materials and their sources

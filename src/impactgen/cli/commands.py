@@ -73,12 +73,62 @@ def _compare(args: argparse.Namespace) -> int:
     import impactgen
     from ..compare import format_comparison
     scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    if args.laws is not None or args.speeds is not None:
+        return _compare_contact_laws(args, scene)
+    if args.out is not None:
+        raise SceneError("--out", "is the figure of --speeds: give --speeds LOW..HIGH[:N]")
     table = impactgen.compare_laws(scene, engine=args.engine)
     if args.json:
         rows = table.to_dict(orient="records")
         print(json.dumps({"scene": scene.name, "rows": [{k: _json_number(v) for k, v in r.items()} for r in rows]}))
     else:
         print("\n".join(format_comparison(table, scene.n)))
+    return 0
+
+
+def _compare_contact_laws(args: argparse.Namespace, scene) -> int:
+    """impactgen compare --laws/--speeds: the contact laws side by side, in C (run_batch)."""
+    from .. import contact_compare as cc
+    if args.engine != "c":
+        raise SceneError("--engine", "compare --laws and --speeds run in C (impactgen.run_batch); "
+                                     "leave out --engine reference")
+    laws = cc.check_laws(args.laws if args.laws is not None else [scene["contact.model"]])
+    speeds = cc.parse_speeds(args.speeds) if args.speeds is not None else None
+    if speeds is None and args.out is not None:
+        raise SceneError("--out", "is the figure of --speeds: give --speeds LOW..HIGH[:N]")
+    table = cc.compare_contact_laws(scene, laws)
+    out = {"scene": scene.name, "rows": [{k: _json_number(v) for k, v in r.items()}
+                                         for r in table.to_dict(orient="records")]}
+    if speeds is not None:
+        frame = cc.speed_sweep(scene, laws, speeds)
+        figure = cc.plot_speed_sweep(frame, args.out or Path(f"{scene.name}-laws.png"),
+                                     f"{scene.name}: first impact against the normal impact speed")
+        out.update({"speeds": cc.speeds_json(frame), "figure": str(figure)})
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"{scene.name}: the first impact under each contact law")
+    print("\n".join(cc.format_law_table(table)))
+    if speeds is not None:
+        print(f"{len(laws)} laws x {len(speeds)} speeds from {speeds[0]:g} to {speeds[-1]:g} m/s: {out['figure']}")
+    return 0
+
+
+def _fit(args: argparse.Namespace) -> int:
+    """impactgen fit: scene keys fitted to measured impacts, with their errors (docs/fitting.md)."""
+    import impactgen
+    from ..fitting.report import fit_json, format_fit, plot_fit
+    scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    out = args.out or Path(f"{scene.name}-fit.png")
+    if out.suffix.lower() != ".png":
+        raise SceneError("--out", f"the figure is a PNG file: give a name ending in .png, got {out}")
+    result = impactgen.fit(scene, args.data, args.fit, laws=args.law)
+    figure = plot_fit(result, out)
+    if args.json:
+        print(json.dumps({**fit_json(result), "figure": str(figure)}))
+    else:
+        print("\n".join(format_fit(result)))
+        print(f"figure of measured against fitted: {figure}")
     return 0
 
 
@@ -328,5 +378,5 @@ def links(args: argparse.Namespace) -> int:
 
 COMMANDS = {"run": _run, "examples": _examples, "sweep": _sweep, "crosscheck": _crosscheck, "plot": _plot,
             "animate": _animate, "stability": _stability, "compare": _compare, "bench": _bench, "fmu": _fmu,
-            "generate": _generate, "paper-table": _paper_table,
+            "generate": _generate, "paper-table": _paper_table, "fit": _fit,
             "materials": _materials}

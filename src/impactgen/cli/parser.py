@@ -108,15 +108,45 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--debug", action="store_true", help="show tracebacks")
 
     # -- compare (the rigid-body impact laws beside the compliant run): impactgen.compare
-    cmp = sub.add_parser("compare", help="the rigid-body impact laws beside the compliant run",
+    cmp = sub.add_parser("compare", help="the rigid-body impact laws beside the compliant run, or the "
+                                         "contact laws side by side (--laws)",
                          description="Simulate a scene's first impact, then give its pre-impact state to "
                                      "Newton's, Poisson's and Stronge's energetic law with the coefficients "
-                                     "of restitution the compliant run produced (docs/impact-laws.md).")
+                                     "of restitution the compliant run produced (docs/impact-laws.md). With "
+                                     "--laws: the first impact under each contact law (contact.model), with "
+                                     "e_N, e_E, delta_max, the permanent set delta_r, P_max and the contact "
+                                     "time; --speeds sweeps the normal impact speed (docs/fitting.md).")
     cmp.add_argument("scene", type=Path, help=SCENE_HELP)
     cmp.add_argument("--engine", choices=("c", "reference"), default="c", help="engine (default c)")
+    cmp.add_argument("--laws", default=None, metavar="A,B,...",
+                     help="contact laws to run side by side, e.g. three-phase,hertz (any contact.model)")
+    cmp.add_argument("--speeds", default=None, metavar="LOW..HIGH[:N]",
+                     help="sweep the tip's normal impact speed over N (default 10) speeds in m/s and draw "
+                          "e_N, delta_max and the contact time against it (the scene's law without --laws)")
+    cmp.add_argument("--out", type=Path, default=None, metavar="FIG",
+                     help="the --speeds figure (PNG; default <scene name>-laws.png)")
     cmp.add_argument("--json", action="store_true", help="print the rows as one JSON object")
     cmp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
     cmp.add_argument("--debug", action="store_true", help="show tracebacks")
+
+    fit = sub.add_parser("fit", help="fit scene parameters to measured impacts (least squares, with error bars)",
+                         description="Fit scene keys to the impacts measured in DATA.csv by least squares with "
+                                     "the compiled model (docs/fitting.md). DATA.csv has one row per impact: "
+                                     "columns named by scene keys are its inputs (initial.u[2]), columns named "
+                                     "as a sweep's result columns its measurements (delta_r, t_contact, "
+                                     "u_final[2], coefficients.e_N), sigma:NAME their standard deviations.")
+    fit.add_argument("scene", type=Path, help=SCENE_HELP)
+    fit.add_argument("data", type=Path, metavar="DATA.csv", help="the measured impacts, one row each")
+    fit.add_argument("--fit", required=True, metavar="KEY[=LOW..HIGH],...",
+                     help="the scene keys to fit, each with optional bounds, e.g. "
+                          "rod.yield_strength=3e8..1.1e9,contact.friction=0..1")
+    fit.add_argument("--law", default=None, metavar="A,B,...",
+                     help="contact laws (contact.model) to fit each and rank by AIC (default the scene's)")
+    fit.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    fit.add_argument("--out", type=Path, default=None, metavar="FIG",
+                     help="the figure of measured against fitted values (PNG; default <scene name>-fit.png)")
+    fit.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP)
+    fit.add_argument("--debug", action="store_true", help="show tracebacks")
 
     anim = sub.add_parser("animate", help="an animation of the chain over the run (GIF or MP4)",
                           description="Draw the chain moving over the run, the surface, and each contact "

@@ -55,6 +55,14 @@ def run_case(out: "ChunkColumns", base: Scene, index: int, overrides: dict[str, 
 SCALARS = (*SUMMARY_LEADING, "n_switches", "n_stick_slip")  # the summary's leading scalars, its lists counted
 
 
+def summary_column_names(n: int) -> list[str]:
+    """The result columns of a sweep's table for an n-link scene, in their order: the names a
+    fit's measurements are given by (u_final[2], coefficients.e_N, ...)."""
+    return [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
+            *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS),
+            *(f"coefficients.{name}" for name in COEFFICIENTS)]
+
+
 Record = tuple[bytes, np.dtype]  # a summary's C record and its dtype (SimulationResult.summary_record)
 
 
@@ -76,10 +84,7 @@ def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.nd
     for k in cases:
         models.setdefault(records[k][0][1], []).append(k)
     n = max(records[k][1] for k in cases)
-    names = [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
-             *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS),
-             *(f"coefficients.{name}" for name in COEFFICIENTS)]
-    columns = {name: np.full(len(records), np.nan) for name in names}
+    columns = {name: np.full(len(records), np.nan) for name in summary_column_names(n)}
     integers: set[str] = set()
     for dtype, rows in models.items():
         part = _record_columns(np.frombuffer(b"".join(records[k][0][0] for k in rows), dtype), records[rows[0]][1])
