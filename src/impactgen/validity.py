@@ -142,9 +142,12 @@ def issue_warnings(warnings: list[str], scene_name: str,
 
 
 def point_constants(scene: Scene, point: str) -> ContactConstants:
-    """The contact constants of a contact point ("tip", "joint k"), with its own radius."""
+    """The contact constants of a contact point ("tip", "joint k", a free chain's "base"),
+    with its own radius."""
     if point == "tip":
         return contact_constants(scene)
+    if point == "base":
+        return contact_constants(scene, scene.base_radius)
     return contact_constants(scene, scene.joint_radii[point_number(point, scene.n) - 1])
 
 
