@@ -21,7 +21,7 @@ from . import contact as law
 from . import machine
 from .expressions import TIP, ModelExpressions, assemble_model
 from .parameters import RULES, Field
-from .spec import PHASES, STATE_LAW, STATES, ModelSpec
+from .spec import BASE_POINT, PHASES, STATE_LAW, STATES, ModelSpec, point_name
 
 PHASE_CODES = {name: code for code, name in enumerate(PHASES)}
 
@@ -173,7 +173,8 @@ def _kernel(model: ModelExpressions, blocks: list[CBlock], extra: tuple = ()) ->
             for fn in ("sin", "cos") if f"{fn}_q{i}" in reads]
     trig_only = frozenset(angle for _, _, angle, _ in trig) - reads
     reads |= trig_only
-    states = [(i, f"q{i + 1}") for i in range(n)] + [(n + i, f"u{i + 1}") for i in range(n)]
+    names = list(map(str, model.chain.symbols.coordinates + model.chain.symbols.speeds))
+    states = list(enumerate(names))  # q, (x_0, y_0,) u, (u_x0, u_y0)
     used_states = tuple((i, name) for i, name in states if name in reads)
     params = tuple((f.name, "p") for f in model.params if f.name in reads) + tuple(
         (f.name, "pc") for f in model.point_params if f.name in reads)
@@ -188,6 +189,7 @@ class EmitContext:
     prefix: str
     spec: ModelSpec
     n: int  # links
+    dof: int  # generalized coordinates: the links' angles, and a free chain's base point's two
     nstate: int
     state_names: tuple[str, ...]
     params: tuple[Field, ...]  # the parameter struct, in order
@@ -239,7 +241,7 @@ KIND_CODE = {"input": 0, "derived": 1, "machine": 2}  # model_param_kind() of ea
 
 def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     spec, chain = model.spec, model.chain
-    n = spec.links
+    n, dof = spec.links, spec.dof
     trig = _trig_names(n)
 
     def t(e: sm.Expr) -> sm.Expr:
@@ -249,8 +251,8 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
 
     # Kane's equations M du/dt = f without contact; each contact point adds J^T (F_f, F) in C
     M = chain.mass_matrix
-    kane = c_block([(f"M[{i * n + j}]", t(M[i, j])) for i in range(n) for j in range(i + 1)]
-                   + [(f"f[{i}]", t(model.forcing[i])) for i in range(n)], "kin")
+    kane = c_block([(f"M[{i * dof + j}]", t(M[i, j])) for i in range(dof) for j in range(i + 1)]
+                   + [(f"f[{i}]", t(model.forcing[i])) for i in range(dof)], "kin")
     friction = None
     if model.friction_force is not None:  # F_f = -mu F s in the point's own v_x, s kept by name for holds
         v_x, s_f = sm.Symbol("v_x"), sm.Symbol("s")
@@ -315,7 +317,7 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     outputs = [(o.name, o.doc) for o in model.outputs] + (joints["outputs"] if joints else [])
     contact_points = _contact_points(model, [name for name, _ in outputs])
     return EmitContext(
-        prefix=prefix, spec=spec, n=n, nstate=len(model.state_names), state_names=model.state_names,
+        prefix=prefix, spec=spec, n=n, dof=dof, nstate=len(model.state_names), state_names=model.state_names,
         params=model.params, point_params=model.point_params, phases=[(p.upper(), PHASE_CODES[p]) for p in model.phases], events=events,
         outputs=outputs,
         kane=_kernel(model, [kane]), friction=friction, constrained=spec.constrained,
@@ -366,7 +368,8 @@ def _contact_points(model: ModelExpressions, output_names: list[str]) -> tuple[d
         if pm.number == n:
             name, radius, names = "tip", "R_tip", TIP_OUTPUTS
         else:
-            name, radius = f"joint {pm.number}", f"R_joint{pm.number}"
+            name = point_name(pm.number, n)
+            radius = "R_base" if pm.number == BASE_POINT else f"R_joint{pm.number}"
             names = tuple(f"{o}_J{pm.number}" for o, _ in POINT_OUTPUTS)
         first_event = len(model.events) * (0 if pm.number == n else 1 + model.spec.joints.index(pm.number))
         points.append({"name": name, "radius": radius, "number": pm.number, "first_event": first_event,

@@ -16,7 +16,7 @@ import sympy as sm
 from . import contact as law
 from .mechanics import ChainEquations, chain_equations
 from .parameters import Field, fields, point_fields
-from .spec import PHASES, ModelSpec
+from .spec import BASE_POINT, PHASES, ModelSpec, point_name
 
 y_s = sm.Symbol("y_s")  # surface height
 delta_m = sm.Symbol("delta_m", nonnegative=True)  # maximum compression so far
@@ -71,28 +71,39 @@ class PointMotion:
     analytic Jacobian, the derivatives of J and of v over the angles. A force (F_x, F_y) on it
     enters Kane's equations as J^T (F_x, F_y), whichever point it is."""
 
-    number: int  # 1 to n - 1: a joint; n: the tip
+    number: int  # 0: a free chain's base point; 1 to n - 1: a joint; n: the tip
     motion: tuple[Named, ...]  # y, v_x, v_y, Jx[i], Jy[i], Jdot_u[0] (x), Jdot_u[1] (y)
     curvature: tuple[Named, ...] = ()  # the nonzero Hx[i n + j] = dJx_i/dq_j, Hy[..], dv_x[j] = dv_x/dq_j, dv_y[j]
+
+
+def _point_position(chain: ChainEquations, number: int) -> tuple[sm.Expr, sm.Expr]:
+    """Where contact point `number` is: the base point (0, a free chain's), joint k, the tip (n)."""
+    if number == chain.n:
+        return chain.tip_position
+    if number == BASE_POINT:
+        return chain.symbols.base_q
+    return chain.joint_x[number - 1], chain.joint_y[number - 1]
 
 
 def _point_motion(chain: ChainEquations, number: int) -> PointMotion:
     s = chain.symbols
     n = chain.n
-    x, y = chain.tip_position if number == n else (chain.joint_x[number - 1], chain.joint_y[number - 1])
-    v = [sum(r.diff(q) * u for q, u in zip(s.q, s.u)) for r in (x, y)]
-    what = "the tip" if number == n else f"joint {number}"
+    x, y = _point_position(chain, number)
+    coordinates, speeds = s.coordinates, s.speeds
+    v = [sum(r.diff(q) * u for q, u in zip(coordinates, speeds)) for r in (x, y)]
+    what = point_name(number, n).replace("tip", "the tip")
     rows = [Named("y", y, f"height of {what}, m"),
             Named("v_x", v[0], "its velocity x, m/s"), Named("v_y", v[1], "its velocity y, m/s")]
     for axis, vel in zip("xy", v):
-        rows += [Named(f"J{axis}[{i}]", vel.diff(u), f"dv_{axis}/du{i + 1}") for i, u in enumerate(s.u)]
-    rows += [Named(f"Jdot_u[{k}]", sum(vel.diff(q) * u for q, u in zip(s.q, s.u)), f"(dJ_{axis}/dt) u")
+        rows += [Named(f"J{axis}[{i}]", vel.diff(u), f"dv_{axis}/d{u}") for i, u in enumerate(speeds)]
+    rows += [Named(f"Jdot_u[{k}]", sum(vel.diff(q) * u for q, u in zip(coordinates, speeds)), f"(dJ_{axis}/dt) u")
              for k, (axis, vel) in enumerate(zip("xy", v))]
     curvature = []
+    dof = len(coordinates)
     for axis, vel in zip("xy", v):
-        curvature += [Named(f"H{axis}[{i * n + j}]", vel.diff(u).diff(q), f"dJ{axis}_{i}/dq{j + 1}")
-                      for i, u in enumerate(s.u) for j, q in enumerate(s.q)]
-        curvature += [Named(f"dv_{axis}[{j}]", vel.diff(q), f"dv_{axis}/dq{j + 1}") for j, q in enumerate(s.q)]
+        curvature += [Named(f"H{axis}[{i * dof + j}]", vel.diff(u).diff(q), f"dJ{axis}_{i}/d{q}")
+                      for i, u in enumerate(speeds) for j, q in enumerate(coordinates)]
+        curvature += [Named(f"dv_{axis}[{j}]", vel.diff(q), f"dv_{axis}/d{q}") for j, q in enumerate(coordinates)]
     return PointMotion(number, tuple(rows), tuple(c for c in curvature if c.expr != 0))
 
 
@@ -147,14 +158,14 @@ class ModelExpressions:
     @property
     def state_names(self) -> tuple[str, ...]:
         s = self.chain.symbols
-        return tuple(map(str, s.q + s.u)) + tuple(f"W_{w.name}" for w in self.works) + tuple(
+        return tuple(map(str, s.coordinates + s.speeds)) + tuple(f"W_{w.name}" for w in self.works) + tuple(
             p.name for p in self.impulses) + self.point_integrals
 
 
 @lru_cache(maxsize=32)
 def assemble_model(spec: ModelSpec) -> ModelExpressions:
     """Pick and prune the expressions `spec` needs."""
-    chain = chain_equations(spec.links)
+    chain = chain_equations(spec.links, spec.free, spec.inclined)
     s = chain.symbols
     x_B, y_B = chain.tip_position
     v_Bx, v_By = chain.tip_velocity
@@ -222,25 +233,29 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
     if spec.has_friction:
         impulses.append(Named("P_friction", s.F_f, "friction force: its integral is the tangential impulse, N"))
 
-    used: set[sm.Symbol] = set(machine_symbols(spec))
+    used: set[sm.Symbol] = set(machine_symbols(spec)) | ({s.alpha} if spec.inclined else set())
     for e in [c.expr for c in cases] + [c.active for c in cases] + [e.expr for e in events] + [friction_force or 0]:
         used |= sm.sympify(e).free_symbols
-    params = fields(spec.links, spec.friction_law, {str(x) for x in used}, spec.joints)
+    params = fields(spec.links, spec.friction_law, {str(x) for x in used}, spec.joints,
+                    base=BASE_POINT in spec.joints)
     point_params = point_fields(spec.friction_law, {str(x) for x in used})
 
     forcing = chain.forcing.subs({s.F: 0, s.F_f: 0})  # gravity and the motion; contact enters per point
     jacobian = _jacobian(chain, forcing, tuple(cases), friction_force) if spec.jacobian else None
     return ModelExpressions(spec, chain, forcing, tip, tuple(cases), friction_force, sign, tuple(events),
-                            tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain),
+                            tuple(outputs), tuple(works), params, jacobian, tuple(impulses), _heights(chain, spec),
                             tuple(_point_motion(chain, k) for k in (*spec.joints, spec.links)), point_params)
 
 
-def _heights(chain: ChainEquations) -> tuple[Named, ...]:
+def _heights(chain: ChainEquations, spec: ModelSpec) -> tuple[Named, ...]:
     """The height above the surface of every point that can go under it: each joint between
-    two links, then the tip (what the floor net of the run checks after every step)."""
+    two links, then the tip, then a free chain's base point (what the floor net of the run
+    checks after every step, by the point's number: h[k - 1], the base's at h[n])."""
     joints = [Named(f"joint{i + 1}", y - y_s, f"height of joint {i + 1} above the surface, m")
               for i, y in enumerate(chain.joint_y)]
-    return tuple(joints) + (Named("tip", chain.tip_position[1] - y_s, "height of the tip above the surface, m"),)
+    base = (Named("base", chain.symbols.base_q[1] - y_s, "height of the base point above the surface, m"),) \
+        if spec.free else ()
+    return tuple(joints) + (Named("tip", chain.tip_position[1] - y_s, "height of the tip above the surface, m"),) + base
 
 
 def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:

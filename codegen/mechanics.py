@@ -38,7 +38,7 @@ class ChainSymbols:
     F_f: sm.Symbol
     base_q: tuple[sm.Symbol, ...] = ()  # a free chain's (x_0, y_0), m; () for a pinned one
     base_u: tuple[sm.Symbol, ...] = ()  # their rates (u_x0, u_y0), m/s
-    alpha: sm.Symbol | None = None  # the surface's angle (rad) when inclined, else None (level)
+    alpha: sm.Symbol | None = None  # the surface's angle in degrees (surface.angle_deg) when inclined, else None
 
     @classmethod
     def for_links(cls, n: int, free: bool = False, inclined: bool = False) -> "ChainSymbols":
@@ -53,7 +53,7 @@ class ChainSymbols:
             F_f=sm.Symbol("F_f"),
             base_q=(sm.Symbol("x_0"), sm.Symbol("y_0")) if free else (),
             base_u=(sm.Symbol("u_x0"), sm.Symbol("u_y0")) if free else (),
-            alpha=sm.Symbol("alpha") if inclined else None,
+            alpha=sm.Symbol("angle_deg") if inclined else None,
         )
 
     @property
@@ -71,7 +71,8 @@ class ChainSymbols:
         """Gravity's acceleration (x, y) in the surface's frame."""
         if self.alpha is None:
             return sm.S.Zero, -self.g
-        return self.g * sm.sin(self.alpha), -self.g * sm.cos(self.alpha)
+        angle = sm.pi * self.alpha / 180
+        return self.g * sm.sin(angle), -self.g * sm.cos(angle)
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ class Parameter:
     unit: str
     doc: str
     kind: str  # "input" | "derived" | "machine"
-    needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "frozen" | "used"
+    needs: str = "always"  # "always" | "friction" | "regularized" | "coulomb" | "frozen" | "used" | "base"
     per_link: bool = False
     per_joint: bool = False
     per_point: bool = False  # a field of each contact point's record (point[k].name), not of the struct
@@ -57,8 +57,8 @@ class Parameter:
 
     def names(self, links: int, joints: tuple[int, ...] = ()) -> list[tuple[str, str, int]]:
         """(C name, scene key, link or joint index from 0) of each field the row stands for."""
-        if self.per_joint:
-            return [(f"{self.name}{j}", self.key.format(i=j), j - 1) for j in joints]
+        if self.per_joint:  # (a free chain's base point, 0, has its own row: R_base)
+            return [(f"{self.name}{j}", self.key.format(i=j), j - 1) for j in joints if j > 0]
         if not self.per_link:
             return [(self.name, self.key, 0)]
         return [(f"{self.name}{i}", self.key.format(i=i), i - 1) for i in range(1, links + 1)]
@@ -106,6 +106,11 @@ PARAMETERS: tuple[Parameter, ...] = (
               read=attrgetter("surface.yield_strength"), **POSITIVE),
     Parameter("R_joint", "contact.joint_radius[{i}]", "m", "radius of joint {i}'s contact (the end of link {i})",
               "input", per_joint=True, read=attrgetter("joint_radii"), **POSITIVE),
+    Parameter("R_base", "contact.base_radius", "m", "radius of a free chain's base point's contact (the start of link 1)",
+              "input", needs="base", read=attrgetter("base_radius"), **POSITIVE),
+    Parameter("angle_deg", "surface.angle_deg", "deg", "the surface's inclination: it descends towards +x",
+              "input", needs="used", read=attrgetter("surface_angle_deg"), low=-90.0, high=90.0, low_open=True,
+              high_open=True),
     Parameter("surface_height", "surface.height", "m",
               "height of the undeformed surface (ignored when surface.height_initial is set)", "input",
               read=lambda s: 0.0 if s.surface_height is None else s.surface_height),
@@ -189,8 +194,11 @@ def broken_rule(scene: Any) -> tuple[Rule, str] | None:
     return None
 
 
-def included(p: Parameter, friction_law: str, used: set[str]) -> bool:
-    """Whether a model with this friction law, whose expressions read `used`, has row `p`."""
+def included(p: Parameter, friction_law: str, used: set[str], base: bool = False) -> bool:
+    """Whether a model with this friction law, whose expressions read `used` (and with a free
+    chain's base point among its contact points if `base`), has row `p`."""
+    if p.needs == "base":
+        return base
     if p.needs == "always":
         return True
     if p.needs == "friction":
@@ -219,11 +227,13 @@ class Field:
         return float(self.row.value(scene, self.link))
 
 
-def fields(links: int, friction_law: str, used: set[str], joints: tuple[int, ...] = ()) -> tuple[Field, ...]:
+def fields(links: int, friction_law: str, used: set[str], joints: tuple[int, ...] = (),
+           base: bool = False) -> tuple[Field, ...]:
     """The parameter struct of a model with `links` links, this friction law and contact at
-    `joints`, whose expressions (force laws, events, switch laws) read the symbols in `used`
-    (without the per-point fields: `point_fields`)."""
-    return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction_law, used)
+    `joints` (and at a free chain's base point if `base`), whose expressions (force laws,
+    events, switch laws) read the symbols in `used` (without the per-point fields:
+    `point_fields`)."""
+    return tuple(Field(name, key, p, link) for p in PARAMETERS if included(p, friction_law, used, base)
                  and not p.per_point for name, key, link in p.names(links, joints))
 
 
@@ -241,7 +251,7 @@ def markdown_table() -> str:
                 else f"point[k].{p.name}" if p.per_point else p.name)
         key = p.key.replace("{i}", "i") if p.key else ""
         when = {"always": "", "friction": " (with friction)", "regularized": " (regularized friction)",
-                "coulomb": "", "frozen": "", "used": ""}[p.needs]
+                "coulomb": "", "frozen": "", "used": "", "base": " (free chains)"}[p.needs]
         rows.append(f"| `{name}` | {f'`{key}`' if key else ''} | {p.unit if p.unit not in ('', '1') else '-'} | "
                     f"{kinds[p.kind]} | {p.range_text()} | {p.doc.replace('{i}', 'i')}{when} |")
     return "\n".join(rows)

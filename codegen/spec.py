@@ -19,15 +19,18 @@ STATE_LAW = {"free": "free", "elastic": "elastic", "elastoplastic": "elastoplast
              "restitution": "restitution", "reloading": "restitution", "sustained": "sustained"}
 
 
+BASE_POINT = 0  # a free chain's base point (the start of link 1) is contact point 0
+
+
 def point_name(number: int, n: int) -> str:
     """The name of contact point `number` (0 to n) of an n-link chain: "base" (a free chain's
-    base point, 0), "joint k" (the end of link k), or "tip"."""
-    return "tip" if number == n else ("base" if number == 0 else f"joint {number}")
+    base point, 0), "joint k" (the end of link k), or "tip" (n)."""
+    return "tip" if number == n else "base" if number == BASE_POINT else f"joint {number}"
 
 
 def point_number(point: str, n: int) -> int:
     """A point's number as the C engine records it: 0 for "base", k for "joint k", n for "tip"."""
-    return n if point == "tip" else (0 if point == "base" else int(point.split()[-1]))
+    return n if point == "tip" else BASE_POINT if point == "base" else int(point.split()[-1])
 
 
 @dataclass(frozen=True)
@@ -40,8 +43,11 @@ class ModelSpec:
     jacobian: bool = False  # emit the analytic Jacobian (for BDF)
     sustained: bool = False  # emit the sustained-contact phase (repeated impacts to a time)
     # the joints (1 to links - 1, the end of that link) that can reach the surface and so get
-    # contact code of their own beside the tip's; the others are pruned (docs/model.md)
+    # contact code of their own beside the tip's; the others are pruned (docs/model.md). A free
+    # chain's base point is point 0 and is listed here too when it can reach the surface.
     joints: tuple[int, ...] = ()
+    free: bool = False  # nothing holds the chain: its base point's x_0, y_0 join the coordinates
+    inclined: bool = False  # the surface is inclined (surface.angle_deg): gravity has an x component
 
     def __post_init__(self) -> None:
         if self.links < 1:
@@ -50,9 +56,15 @@ class ModelSpec:
             raise ValueError(f"unknown contact model {self.contact_model!r}")
         if self.friction_law not in FRICTION_KINDS:
             raise ValueError(f"unknown friction law {self.friction_law!r}")
-        if self.joints and (list(self.joints) != sorted(set(self.joints)) or not 1 <= self.joints[0]
+        first = BASE_POINT if self.free else 1
+        if self.joints and (list(self.joints) != sorted(set(self.joints)) or not first <= self.joints[0]
                             or not self.joints[-1] < self.links):
-            raise ValueError(f"joints must be distinct, increasing, between 1 and {self.links - 1}")
+            raise ValueError(f"joints must be distinct, increasing, between {first} and {self.links - 1}")
+
+    @property
+    def dof(self) -> int:
+        """The generalized coordinates: the links' angles, and a free chain's base point's two."""
+        return self.links + (2 if self.free else 0)
 
     @property
     def has_friction(self) -> bool:
@@ -81,10 +93,12 @@ class ModelSpec:
         """A short readable name, e.g. 'chain2-three-phase-regularized'."""
         return (f"chain{self.links}-{self.contact_model}-{self.friction_law}"
                 + ("-jacobian" if self.jacobian else "") + ("-sustained" if self.sustained else "")
-                + ("-joints" + "-".join(map(str, self.joints)) if self.joints else ""))
+                + ("-joints" + "-".join(map(str, self.joints)) if self.joints else "")
+                + ("-free" if self.free else "") + ("-inclined" if self.inclined else ""))
 
     def to_json(self) -> str:
         facts = asdict(self)
-        if not self.joints:  # a tip-only model keeps the key (and the cache) it had before joints
-            del facts["joints"]
+        for key in ("joints", "free", "inclined"):  # a model keeps the key (and the cache) it had before them
+            if not facts[key]:
+                del facts[key]
         return json.dumps(facts, sort_keys=True)

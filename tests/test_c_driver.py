@@ -47,3 +47,17 @@ def test_c_driver_builds_a_model_generated_with_a_prefix(tmp_path, c_driver):
     assert printed["scene"] == "steel-chain-4" and printed["status"] == "ok"
     for name in FIELDS:
         assert float(printed[name]) == pytest.approx(s[name], rel=1e-8), name
+
+
+def test_c_driver_runs_a_free_rod(tmp_path, c_driver):
+    """rod-drop (a free rod, both ends striking in turn) from its generated folder: the C
+    driver's impacts, by point, and its final state (the base point's too) are impactgen's."""
+    printed = build_and_run("rod-drop", tmp_path / "model", c_driver)
+    result = impactgen.simulate(impactgen.load_scene("rod-drop"))
+    assert printed["status"] == "ok"
+    points = [printed[f"impact[{i}].point"] for i in range(1, len(result.impacts) + 1)]
+    assert points == [impact.point for impact in result.impacts] and {"base", "tip"} <= set(points)
+    final = result.summary
+    assert float(printed["u_final[1]"]) == pytest.approx(final["u_final"][0], rel=1e-8)
+    for i, value in enumerate(result.base[:2, -1], start=1):
+        assert float(printed[f"base_final[{i}]"]) == pytest.approx(value, rel=1e-8)

@@ -155,7 +155,12 @@ int main(int argc, char **argv)
     double depth = 0.0;
     const int inside = model_machine_start_inside(&p, y0, &depth);
     if (inside >= 0) {
-        const char *where = inside == 0 ? "the pivot" : (inside == MODEL_NQ ? "the tip" : "a joint");
+#ifdef MODEL_FREE
+        const char *base = "the base point";
+#else
+        const char *base = "the pivot";
+#endif
+        const char *where = inside == 0 ? base : (inside == MODEL_NQ ? "the tip" : "a joint");
         fprintf(stderr, "%s (point %d of the chain) starts %.3g m inside the surface: lower the surface or change "
                 "the initial angles\n", where, inside, depth);
         return 2;
@@ -193,7 +198,10 @@ int main(int argc, char **argv)
     printf("R_res %.17g\n", sum->R_res);
     printf("t_contact %.17g\n", sum->t_contact);
     for (int i = 0; i < MODEL_NQ; ++i) printf("q_final[%d] %.17g\n", i + 1, sum->y_final[i]);
-    for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, sum->y_final[MODEL_NQ + i]);
+    for (int i = 0; i < MODEL_NQ; ++i) printf("u_final[%d] %.17g\n", i + 1, sum->y_final[MODEL_NDOF + i]);
+#ifdef MODEL_FREE
+    for (int i = 0; i < 2; ++i) printf("base_final[%d] %.17g\n", i + 1, sum->y_final[MODEL_NQ + i]);
+#endif
     printf("W_normal %.17g\n", sum->W_normal);
 #ifdef MODEL_Y_W_friction
     printf("W_friction %.17g\n", sum->W_friction);
@@ -203,6 +211,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < impacts.n && i < MAX_LISTED; ++i) {
         const impact_line *line = &impacts.line[i];
         if (line->point == MODEL_NQ) printf("impact[%d].point tip\n", i + 1);
+        else if (line->point == 0) printf("impact[%d].point base\n", i + 1);  /* a free chain's base point */
         else printf("impact[%d].point joint %d\n", i + 1, line->point);
         printf("impact[%d].t_start %.17g\n", i + 1, line->t_start);
         printf("impact[%d].t_end %.17g\n", i + 1, line->t_end);

@@ -35,6 +35,10 @@
 
 #include "model.h"
 
+#ifndef MODEL_NDOF  /* a pinned chain's coordinates are its angles (a free chain's model.h adds x_0, y_0) */
+#define MODEL_NDOF MODEL_NQ
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -142,15 +146,17 @@ const char *model_machine_state_name(int state);
  * Coulomb friction: "slip+", "slip-" or "stick"; "" in free flight or without that friction. */
 const char *model_machine_slip_name(int state, double slip);
 /* The floor net, after each accepted step: the first point of the chain (1 to MODEL_NQ - 1:
- * that joint, MODEL_NQ: the tip; model_heights' order) found deeper below the surface than
- * MODEL_FLOOR_DEPTH of the shortest link, with its depth in *depth, m; 0 when none is. */
+ * that joint, MODEL_NQ: the tip, MODEL_NQ + 1: a free chain's base point; model_heights'
+ * order) found deeper below the surface than MODEL_FLOOR_DEPTH of the shortest link, with its
+ * depth in *depth, m; 0 when none is. */
 int model_machine_below(const model_params *p, const double *y, double *depth);
 /* The start check: a point of the chain that starts inside the surface deeper than
  * MODEL_TOUCH_TOLERANCE of the chain's length (at least 1 m), with its depth in *depth, m: the
- * tip (MODEL_NQ) if it is, else the first from the pivot (0) through the joints (1 to
- * MODEL_NQ - 1); -1 when every point starts on or above it (the joints and the tip may touch
- * it). The surface is p->surface_height, or the
- * tip's height when p->surface_initial is set (the scene checks refuse the same starts). */
+ * tip (MODEL_NQ) if it is, else the first from the pivot (0; a free chain's base point) through
+ * the joints (1 to MODEL_NQ - 1); -1 when every point starts on or above it (the joints and the
+ * tip may touch it). The surface is p->surface_height, or the
+ * tip's height when p->surface_initial is set (the scene checks refuse the same starts); a free
+ * chain's, its lowest contact point's. */
 int model_machine_start_inside(const model_params *p, const double *y, double *depth);
 /* cdef-end */
 

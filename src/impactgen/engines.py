@@ -35,13 +35,18 @@ def model_spec(scene: Scene, solver: Solver | None = None) -> ModelSpec:
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
     joints = reachable_joints(scene)
-    return ModelSpec(scene.n, contact.model, friction_law, solver.jacobian == "analytic", sustained,
-                     joints)
+    # the analytic Jacobian is written for a pinned chain: a free one's runs on difference quotients
+    analytic = solver.jacobian == "analytic" and not scene.free
+    return ModelSpec(scene.n, contact.model, friction_law, analytic, sustained, joints,
+                     scene.free, scene.surface_angle_deg != 0.0)
 
 
 def reachable_joints(scene: Scene) -> tuple[int, ...]:
-    """The joints (1 to n - 1) that can touch the surface: those whose distance from the
-    pivot along the chain reaches the surface below it. The others get no contact code."""
+    """The contact points besides the tip that can touch the surface: the joints (1 to n - 1)
+    whose distance from the pivot along the chain reaches the surface below it. The others get
+    no contact code. Every point of a free chain can reach it: its base point (0) and its joints."""
+    if scene.free:
+        return tuple(range(scene.n))
     lengths = scene.chain.length
     y_s = joint_heights(scene)[-1] if scene.surface_height is None else scene.surface_height  # "initial": the tip's
     depth = -y_s - TOUCH_TOLERANCE * max(1.0, sum(lengths))  # of the surface below the pivot, less the rounding

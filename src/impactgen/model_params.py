@@ -42,7 +42,7 @@ def _inputs(scene: Scene, rows: tuple[Parameter, ...], joints: tuple[int, ...]) 
         if row.per_link:
             values.extend(row.read(scene))
         elif row.per_joint:
-            values.extend(row.read(scene)[j - 1] for j in joints)
+            values.extend(row.read(scene)[j - 1] for j in joints if j > 0)  # the base point: R_base
         else:
             values.append(row.read(scene))
     return values
@@ -76,7 +76,7 @@ def params_at_start(model: CompiledModel, scene: Scene):
     law): for code that evaluates the model's functions outside a run."""
     ffi = model.ffi
     params = fill_params(model, scene)
-    y0 = ffi.new("double[]", list(scene.q0) + list(scene.u0) + [0.0] * (model.nstate - 2 * scene.n))
+    y0 = ffi.new("double[]", list(scene.motion_start) + [0.0] * (model.nstate - 2 * scene.dof))
     model.lib.model_machine_start(ffi.new("model_machine *"), params, 0.0, y0, 1)
     for point in params.point:
         point.phase = model.lib.MODEL_PHASE_FREE

@@ -219,7 +219,7 @@ class SimulationResult:
     def first_impact(self) -> dict[str, Any]:
         """The first impact (MODEL section 6), computed on first use and kept."""
         if self.tallied is not None:
-            return from_tally(self.tallied[1], self.n, self.impact_records)
+            return from_tally(self.tallied[1], self.n, self.impact_records, self.given_scene.free)
         return first_impact_summary(self)
 
     @property
@@ -231,7 +231,8 @@ class SimulationResult:
     @cached_property
     def _whole_run(self) -> dict[str, Any]:
         """The summary of a run to a time (or of a failed run)."""
-        return run_summary(self) if self.tallied is None else from_tally(self.tallied[0], self.n, self.impact_records)
+        return run_summary(self) if self.tallied is None else from_tally(self.tallied[0], self.n, self.impact_records,
+                                                                         self.given_scene.free)
 
     @property
     def summary_tallied(self) -> Tallied | None:
@@ -276,11 +277,23 @@ class SimulationResult:
 
     @property
     def q(self) -> np.ndarray:
+        """The links' angles, rad (n rows)."""
         return self.y[: self.n]
 
     @property
     def u(self) -> np.ndarray:
-        return self.y[self.n: 2 * self.n]
+        """The links' angular speeds, rad/s (n rows)."""
+        dof = self.given_scene.dof
+        return self.y[dof: dof + self.n]
+
+    @property
+    def base(self) -> np.ndarray | None:
+        """A free chain's base point: x_0, y_0 (m) and their rates u_x0, u_y0 (m/s), 4 rows; None
+        for a pinned chain."""
+        if not self.given_scene.free:
+            return None
+        n, dof = self.n, self.given_scene.dof
+        return self.y[[n, n + 1, dof + n, dof + n + 1]]
 
     @property
     def state_names(self) -> list[str]:

@@ -113,7 +113,7 @@ class EngineSession:
         self.n_out = ffi.new("int *")
         self.t_now = ffi.new("double *")
         self.y0 = np.empty(model.nstate)
-        self.works_at_start = (0.0,) * (model.nstate - 2 * model.spec.links)  # the integrated states: works, impulses
+        self.works_at_start = (0.0,) * (model.nstate - 2 * model.spec.dof)  # the integrated states: works, impulses
         self.y0_c = ffi.from_buffer("double[]", self.y0)
         self.output_index = {name: k for k, name in enumerate(model.output_names)}
         self._stats = ffi.new("ig_stats *")
@@ -142,7 +142,7 @@ class EngineSession:
         the run goes on with): sample 0 and the tally begun there, and, when an impact can
         follow, the integrator reset with `solver`'s tolerances as the machine scales them
         (ig_run_begin). Returns the machine's MODEL_START_*."""
-        self.y0_c[0:len(self.y0)] = scene.q0 + scene.u0 + self.works_at_start  # (cffi converts faster than numpy)
+        self.y0_c[0:len(self.y0)] = scene.motion_start + self.works_at_start  # (cffi converts faster than numpy)
         self.t_now[0] = 0.0
         start = self.model.lib.ig_run_begin(self.solver, self.machine, params, 0.0, self.y0_c,
                                             solver.t_end is not None, solver.rtol, solver.atol, solver.max_steps,

@@ -90,18 +90,27 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
         first.t_start if first else math.nan, math.nan if sustained is None else sustained, t_last,
         *(energy[name] for name in ENERGY_TERMS), len(first.switches) if first else 0,
         len(first.stick_slip) if first else 0, len(tip_impacts(result.impacts)),
-        sum(i.point != "tip" for i in result.impacts), point_number(result.impacts[0].point, n) if result.impacts else 0,
+        sum(i.point != "tip" for i in result.impacts),
+        point_number(result.impacts[0].point, n) if result.impacts else no_point(result.given_scene.free),
         *(getattr(first, name) if first else math.nan for name in COEFFICIENTS), tuple(traj.y[i1].tolist()))
-    return from_tally(tallied, n, impacts)
+    return from_tally(tallied, n, impacts, result.given_scene.free)
 
 
-def from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
+def no_point(free: bool) -> int:
+    """first_point without an impact: 0, which a free chain's base point is; -1 for a free chain."""
+    return -1 if free else 0
+
+
+def from_tally(s: Tallied, n: int, impacts: list[Impact], free: bool = False) -> dict[str, Any]:
     """A summary dict (MODEL section 6) from its values (as the C engine tallies them, or as
     `_summary` computes them from the samples); the lists of the first impact's switches
     from its record. NaN (nothing to report) is None here. Its keys: SUMMARY_LEADING, the
-    lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them)."""
+    lists and the final state, SUMMARY_LATER, "energy" with ENERGY_TERMS (a test holds them).
+    A free chain's final state (`free`) has its base point after the angles: u_final and
+    q_final are the links' own."""
     tips = tip_impacts(impacts)  # the tally is the tip's
     first = tips[0] if tips else None
+    dof = n + 2 if free else n
     (T0, Tf, delta_T, delta_max, delta_r, P_max, R_res, t_contact, t_impact, t_sustained, t_final,
      W_normal, W_friction, W_gravity, residual, _, _, count, joint_count, first_point, *coefficients, y) = s  # Tallied's fields
     return {"T0": T0, "Tf": Tf, "delta_T": delta_T, "delta_max": delta_max, "delta_r": delta_r,
@@ -109,8 +118,8 @@ def from_tally(s: Tallied, n: int, impacts: list[Impact]) -> dict[str, Any]:
             "t_impact": None if t_impact != t_impact else t_impact,
             "switches": switch_list(first.switches) if first else [],
             "stick_slip": switch_list(first.stick_slip) if first and first.stick_slip else [],
-            "u_final": list(y[n: 2 * n]), "q_final": list(y[:n]), "impacts": count,
-            "joint_impacts": joint_count, "first_point": first_point or None,
+            "u_final": list(y[dof: dof + n]), "q_final": list(y[:n]), "impacts": count,
+            "joint_impacts": joint_count, "first_point": None if first_point == no_point(free) else first_point,
             "t_sustained": None if t_sustained != t_sustained else t_sustained, "t_final": t_final,
             "energy": {"W_normal": W_normal, "W_friction": W_friction, "W_gravity": W_gravity,
                        "residual": residual},

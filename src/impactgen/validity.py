@@ -142,13 +142,10 @@ def issue_warnings(warnings: list[str], scene_name: str,
 
 
 def point_constants(scene: Scene, point: str) -> ContactConstants:
-    """The contact constants of a contact point ("tip", "joint k", a free chain's "base"),
-    with its own radius."""
+    """The contact constants of a contact point ("tip", "joint k"), with its own radius."""
     if point == "tip":
         return contact_constants(scene)
-    if point == "base":
-        return contact_constants(scene, scene.base_radius)
-    return contact_constants(scene, scene.joint_radii[point_number(point, scene.n) - 1])
+    return contact_constants(scene, scene.point_radius(point_number(point, scene.n)))
 
 
 def _at(impact) -> str:
@@ -176,13 +173,16 @@ def frozen_friction_warning(scene: Scene, impacts, t, y) -> list[str]:
     pushes the tip along its motion and does positive work, which no physical friction does."""
     if scene.contact.friction_mode != "frozen" or scene.contact.friction == 0:
         return []
-    n, L = scene.n, np.asarray(scene.chain.length)
+    n, dof, L = scene.n, scene.dof, np.asarray(scene.chain.length)
     reversed_at = []
     for k, impact in enumerate(impacts, start=1):
         i1 = impact.i_end if impact.i_end is not None else len(t) - 1
         links = point_number(impact.point, n)  # the point is the end of this many links
-        q, u = y[impact.i_start:i1 + 1, :links], y[impact.i_start:i1 + 1, n:n + links]
+        rows = slice(impact.i_start, i1 + 1)
+        q, u = y[rows, :links], y[rows, dof:dof + links]
         v_x = -(L[:links] * np.sin(q) * u).sum(axis=1)  # the point's tangential speed at each sample
+        if scene.free:  # and the base point's, which it moves with
+            v_x = v_x + y[rows, dof + n]
         start = np.sign(v_x[0])
         turned = np.nonzero(v_x * start < 0)[0] if start != 0 else []
         if len(turned):

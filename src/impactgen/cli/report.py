@@ -84,7 +84,8 @@ def _first_impact_lines(result, impact: Impact) -> list[str]:
     "impacts"[k] holds, under the same names."""
     n = result.n
     i_end = impact.i_end if impact.i_end is not None else len(result.trajectory.t) - 1
-    u_after = result.trajectory.y[i_end][n:2 * n]
+    dof = result.given_scene.dof
+    u_after = result.trajectory.y[i_end][dof:dof + n]
     duration = (f"{impact.duration:.6g} s" if impact.duration is not None
                 else "(open: the run ended in contact)")
     energy = energy_balance(impact.T_before, impact.T_after, impact.W_normal, impact.W_friction, impact.W_gravity)
@@ -120,7 +121,8 @@ def format_summary(result) -> str:
     if run is not result.first_impact:
         sustained = (f", sustained contact from t = {run['t_sustained']:.6g} s"
                      if run["t_sustained"] is not None else "")
-        joints = f" at the tip, {run['joint_impacts']} at the joints" if run["joint_impacts"] else ""
+        others = "the base and joints" if result.given_scene.free else "the joints"
+        joints = f" at the tip, {run['joint_impacts']} at {others}" if run["joint_impacts"] else ""
         lines += [
             f"whole run to t = {run['t_final']:.6g} s: {run['impacts']} impacts{joints}{sustained}",
             "  final angles      q = [" + ", ".join(f"{v:.6g}" for v in run["q_final"]) + "] rad",
@@ -130,6 +132,9 @@ def format_summary(result) -> str:
             f"  deepest dent      delta_r = {run['delta_r']:.6g} m, largest force P_max = {run['P_max']:.6g} N"
             + (" (of the tip's impacts)" if run["joint_impacts"] else ""),
         ]
+        if result.given_scene.free:  # where the base point ended, and how fast it went
+            x, y, vx, vy = result.base[:, -1]
+            lines.append(f"  base point        (x, y) = ({x:.6g}, {y:.6g}) m, (vx, vy) = ({vx:.6g}, {vy:.6g}) m/s")
     if result.impacts:
         lines += ["impacts:"] + ["  " + line for line in _impacts_table(result)]
     lines.append(f"solver            {result.stats.get('nsteps', 0)} steps, {result.stats.get('nfev', 0)} RHS "

@@ -20,6 +20,7 @@ from typing import get_type_hints
 from ..codegen.emit import POINT_OUTPUTS
 from ..codegen.expressions import ModelExpressions
 from ..codegen.parameters import Field
+from ..codegen.spec import point_name
 from ..impacts import COEFFICIENTS
 from ..records import Tallied
 from ..summaries import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, summary_unit
@@ -60,6 +61,29 @@ DISCRETE = (("delta_max", "m", "maximum compression of {of} last impact"),
             ("P_max", "N", "normal force at {of} last maximum compression"))
 
 
+def _state(k: int, name: str, n: int, dof: int) -> dict:
+    """The name, unit and description of state k (`name` as the model calls it) of a model of
+    n links and dof coordinates: the angles, a free chain's base point (x_0, y_0, as
+    base[1], base[2]), their rates, then the works and impulses (a joint's own as contact[j].*)."""
+    if k < 2 * dof:
+        rate = k >= dof
+        i = k - dof if rate else k
+        if i < n:
+            return {"name": f"{name[0]}[{name[1:]}]", "unit": "rad/s" if rate else "rad",
+                    "description": f"angular speed of link {i + 1}" if rate else f"absolute angle of link {i + 1}"}
+        axis = "xy"[i - n]
+        return {"name": f"base_velocity[{i - n + 1}]" if rate else f"base[{i - n + 1}]", "unit": "m/s" if rate else "m",
+                "description": f"the base point's {'velocity ' if rate else ''}{axis}"}
+    impulse = name.startswith("P_")
+    if "_J" in name:  # a joint's own work or impulse, W_normal_J2: contact[2].W_normal
+        kind, joint = name.rsplit("_J", 1)
+        where = "the base point" if joint == "0" else f"joint {joint}"
+        return {"name": f"contact[{joint}].{kind}", "unit": "N.s" if impulse else "J",
+                "description": f"{'impulse' if impulse else 'work'} of the {kind[2:]} force at {where}"}
+    return {"name": name, "unit": "N.s" if impulse else "J",
+            "description": f"impulse of the {name[2:]} force" if impulse else f"work of the {name[2:]} force"}
+
+
 def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()) -> list[Variable]:
     """Every FMU variable of `model`, with start values from `scene`. `output_names`: the
     generated model's outputs in C order (GeneratedModel.output_names), the joints' after
@@ -74,21 +98,13 @@ def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()
         return v
 
     states = []
+    dof = model.spec.dof
     for k, name in enumerate(model.state_names):
-        label = f"{name[0]}[{name[1:]}]" if k < 2 * n else name
-        impulse = k >= 2 * n and name.startswith("P_")
-        unit = "rad" if k < n else ("rad/s" if k < 2 * n else "N.s" if impulse else "J")
-        doc = (f"absolute angle of link {k + 1}" if k < n else
-               f"angular speed of link {k - n + 1}" if k < 2 * n else
-               f"impulse of the {name[2:]} force" if impulse else f"work of the {name[2:]} force")
-        if k >= 2 * n and "_J" in name:  # a joint's own work or impulse, W_normal_J2: contact[2].W_normal
-            kind, joint = name.rsplit("_J", 1)
-            label, doc = f"contact[{joint}].{kind}", f"{'impulse' if impulse else 'work'} of the {kind[2:]} force at joint {joint}"
-        states.append(add(name=label, type="Real", causality="local", variability="continuous",
-                          initial="calculated" if k < 2 * n else "exact", start=None if k < 2 * n else 0.0,
-                          unit=unit, description=doc, kind="state", index=k))
+        states.append(add(**_state(k, name, n, dof), type="Real", causality="local", variability="continuous",
+                          initial="calculated" if k < 2 * dof else "exact", start=None if k < 2 * dof else 0.0,
+                          kind="state", index=k))
     for k, s in enumerate(states):
-        unit = {"rad": "rad/s", "rad/s": "rad/s2", "J": "W", "N.s": "N"}[s.unit]
+        unit = {"rad": "rad/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2", "J": "W", "N.s": "N"}[s.unit]
         add(name=f"der({s.name})", type="Real", causality="local", variability="continuous",
             initial="calculated", start=None, unit=unit, description=f"time derivative of {s.name}",
             kind="der", index=k, derivative_of=s.vr)
@@ -107,11 +123,11 @@ def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()
             if f"{point}_J{j}" in c_index:
                 text, _, unit = doc.rpartition(", ")
                 add(name=f"contact[{j}].{point}", type="Real", causality="output", variability="continuous",
-                    initial="calculated", start=None, unit=unit, description=f"joint {j}: {text}", kind="output",
+                    initial="calculated", start=None, unit=unit, description=f"{point_name(j, n)}: {text}", kind="output",
                     index=c_index[f"{point}_J{j}"])
     # the machine's discrete outputs, per point: the tip's (index 0), then each joint's (its slot + 1)
     points = [(0, "", "the tip's" if joints else "the")] + [
-        (slot + 1, f"contact[{j}].", f"joint {j}'s") for slot, j in enumerate(joints) if f"delta_J{j}" in c_index]
+        (slot + 1, f"contact[{j}].", f"{point_name(j, n)}'s") for slot, j in enumerate(joints) if f"delta_J{j}" in c_index]
     for point, prefix, of in points:
         whose = "" if of == "the" else f"{of} "
         add(name=f"{prefix}phase", type="Integer", causality="output", variability="discrete",
@@ -135,8 +151,17 @@ def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()
         add(name=f"initial.u[{i + 1}]", type="Real", causality="parameter", variability="fixed",
             initial="exact", start=float(scene.u0[i]), unit="rad/s", description=f"u{i + 1} at the start",
             kind="u0", index=i)
+    if model.spec.free:  # the base point's start: after the angles in q0, after their rates in u0
+        for i, axis in enumerate("xy"):
+            add(name=f"initial.base[{i + 1}]", type="Real", causality="parameter", variability="fixed",
+                initial="exact", start=float(scene.base_start[i]), unit="m",
+                description=f"the base point's {axis} at the start", kind="q0", index=n + i)
+        for i, axis in enumerate("xy"):
+            add(name=f"initial.base_velocity[{i + 1}]", type="Real", causality="parameter", variability="fixed",
+                initial="exact", start=float(scene.base_velocity[i]), unit="m/s",
+                description=f"the base point's velocity {axis} at the start", kind="u0", index=n + i)
     for kind, of in SUMMARIES:  # last, so that the value references above stay as they were
-        for name, member, index, unit, doc in summary_fields(n):
+        for name, member, index, unit, doc in summary_fields(n, dof):
             integer = TYPES[member] is int
             add(name=f"{kind}.{name}", type="Integer" if integer else "Real", causality="output",
                 variability="discrete" if integer else "continuous", initial="calculated", start=None, unit=unit,
@@ -177,15 +202,17 @@ def _summary_unit(name: str) -> str:
     return "" if unit == "1" else unit.replace(" ", ".")
 
 
-def summary_fields(n: int) -> list[tuple[str, str, int, str, str]]:
+def summary_fields(n: int, dof: int | None = None) -> list[tuple[str, str, int, str, str]]:
     """A summary's fields as `impactgen run --json` and the sweep's columns name them (name,
-    ig_summary member, entry of an array member, unit, what), in the sweep's order."""
+    ig_summary member, entry of an array member, unit, what), in the sweep's order; `dof` the
+    model's coordinates (n, and a free chain's base point's two), where its speeds begin."""
     def field(name: str, member: str | None = None) -> tuple[str, str, int, str, str]:
         return name, member or name, 0, _summary_unit(member or name), SUMMARY_DOCS[member or name]
 
     final = [(f"{which}_final[{i + 1}]", "y_final", i + offset, _summary_unit(f"{which}_final"),
               f"{what} of link {i + 1} at its end")
-             for which, offset, what in (("u", n, "angular speed"), ("q", 0, "angle")) for i in range(n)]
+             for which, offset, what in (("u", n if dof is None else dof, "angular speed"), ("q", 0, "angle"))
+             for i in range(n)]
     return [*(field(name) for name in (*SUMMARY_LEADING, "n_switches", "n_stick_slip")), *final,
             *(field(name) for name in SUMMARY_LATER), *(field(f"energy.{name}", name) for name in ENERGY_TERMS),
             *(field(f"coefficients.{name}", name) for name in COEFFICIENTS)]
@@ -196,7 +223,7 @@ def _unit(f: Field) -> str:
 
 
 # SI base-unit exponents of every unit a variable can carry (modelDescription's UnitDefinitions)
-UNITS = {"rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
+UNITS = {"rad": {"rad": 1}, "deg": {"rad": 1, "factor": 0.017453292519943295}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
          "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3}, "m": {"m": 1},
          "m/s": {"m": 1, "s": -1}, "m/s2": {"m": 1, "s": -2}, "N": {"kg": 1, "m": 1, "s": -2},
          "kg": {"kg": 1}, "Pa": {"kg": 1, "m": -1, "s": -2}, "N.s": {"kg": 1, "m": 1, "s": -1}, "s": {"s": 1}}

@@ -57,18 +57,18 @@ static void impact_scales(const model_params *p, double R, double v_x, double v_
     const double m_eff = v2 > 0.0 ? fmin(2.0 * T / v2, m_total) : m_total;
     double delta_est = pow(15.0 * m_eff * v_n * v_n / (16.0 * p->E_star * sqrt(R)), 0.4);
     double speed = 0.0, energy = T;
-    for (int i = 0; i < MODEL_NQ; ++i) speed = fmax(speed, fabs(y[MODEL_NQ + i]));
+    for (int i = 0; i < MODEL_NDOF; ++i) speed = fmax(speed, fabs(y[MODEL_NDOF + i]));
     if (!(delta_est > 0.0)) {  /* a resting or grazing start: the scales of settling under the chain's weight */
         delta_est = pow(3.0 * m_total * p->g / (4.0 * p->E_star * sqrt(R)), 2.0 / 3.0);
         speed = fmax(speed, sqrt(2.0 * p->g * delta_est) / length);
         energy = fmax(energy, m_total * p->g * delta_est);
     }
-    for (int i = 0; i < MODEL_NQ; ++i) {
-        scale[i] = MODEL_ANGLE_RESOLUTION * delta_est / length;
-        scale[MODEL_NQ + i] = speed;
+    for (int i = 0; i < MODEL_NDOF; ++i) {  /* a free chain's base point's x_0, y_0 in m, not over the length */
+        scale[i] = MODEL_ANGLE_RESOLUTION * delta_est / (i < MODEL_NQ ? length : 1.0);
+        scale[MODEL_NDOF + i] = speed;
     }
     /* the works (the impulses after them are left out of the error test: machine_atol) */
-    for (int i = 2 * MODEL_NQ; i < MODEL_NSTATE; ++i) scale[i] = energy;
+    for (int i = MODEL_NMOTION; i < MODEL_NSTATE; ++i) scale[i] = energy;
 }
 
 /* A new impact of a point at (t, y), whose outputs under the force laws so far are `out`. */
@@ -422,14 +422,14 @@ void model_machine_atol(const model_machine *m, const model_params *p, double rt
 {
     /* free flight: the works get atol times a typical energy */
     const double energy = fmax(model_chain_mass(p) * fmax(p->g, 1.0) * model_chain_length(p), 1e-30);
-    for (int i = 0; i < 2 * MODEL_NQ; ++i) atol_out[i] = atol;
-    for (int i = 2 * MODEL_NQ; i < MODEL_NSTATE; ++i) atol_out[i] = atol * energy;
+    for (int i = 0; i < MODEL_NMOTION; ++i) atol_out[i] = atol;
+    for (int i = MODEL_NMOTION; i < MODEL_NSTATE; ++i) atol_out[i] = atol * energy;
     for (int point = 0; point < MODEL_NCONTACT; ++point) {
         /* inside a point's impact: rtol times its scales, never looser than outside it */
         const model_point_machine *r = &m->point[point];
         if (r->state == MODEL_MACHINE_FREE) continue;
-        for (int i = 0; i < MODEL_NQ; ++i) atol_out[i] = fmin(fmax(rtol * r->scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
-        for (int i = MODEL_NQ; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * r->scale[i], 1e-300));
+        for (int i = 0; i < MODEL_NDOF; ++i) atol_out[i] = fmin(fmax(rtol * r->scale[i], MODEL_ANGLE_ATOL_FLOOR), atol_out[i]);
+        for (int i = MODEL_NDOF; i < MODEL_NSTATE; ++i) atol_out[i] = fmin(atol_out[i], fmax(rtol * r->scale[i], 1e-300));
     }
     /* the impulses and each joint's own works follow the steps the other states set (with
      * them in the error test, the paper's impact took 68 steps instead of 59 for the same
@@ -460,6 +460,13 @@ const char *model_machine_state_name(int state)
     return state >= 0 && state < (int)(sizeof names / sizeof names[0]) ? names[state] : "unknown";
 }
 
+/* Where point `number` (0: a free chain's base point, k: joint k, MODEL_NQ: the tip) sits
+ * in model_heights' output: the joints and the tip in order, the base point after them. */
+static inline int height_index(int number)
+{
+    return number == 0 ? MODEL_NQ : number - 1;
+}
+
 int model_machine_below(const model_params *p, const double *y, double *depth)
 {
     double h[MODEL_NPOINT];
@@ -467,7 +474,7 @@ int model_machine_below(const model_params *p, const double *y, double *depth)
     model_heights(y, h, p);
     /* a point with contact is measured from its own surface level (where it last lifted off
      * from rest, as the tip's y_s) */
-    for (int k = 0; k < MODEL_NCONTACT; ++k) h[model_point_number(k) - 1] += p->point[TIP].y_s - p->point[k].y_s;
+    for (int k = 0; k < MODEL_NCONTACT; ++k) h[height_index(model_point_number(k))] += p->point[TIP].y_s - p->point[k].y_s;
     for (int k = 0; k < MODEL_NPOINT; ++k) {
         if (h[k] < -MODEL_FLOOR_DEPTH * shortest) {
             *depth = -h[k];
@@ -482,18 +489,23 @@ int model_machine_start_inside(const model_params *p, const double *y, double *d
 {
     double h[MODEL_NPOINT];
     model_heights(y, h, p);  /* above the tip's surface level p->point[TIP].y_s */
-    const double y_tip = h[MODEL_NPOINT - 1] + p->point[TIP].y_s;  /* heights above the pivot */
+    const double y_tip = h[MODEL_NQ - 1] + p->point[TIP].y_s;  /* heights above the pivot */
     const double y_s = model_surface_at_start(p, y);
     const double slack = MODEL_TOUCH_TOLERANCE * fmax(1.0, model_chain_length(p));
     if (y_s - y_tip > slack) {  /* the tip first, as the scene checks it (a surface set by its height) */
         *depth = y_s - y_tip;
         return MODEL_NQ;
     }
-    if (y_s > slack) {  /* the pivot, at height 0 */
-        *depth = y_s;
+#ifdef MODEL_FREE
+    const double y_base = h[height_index(0)] + p->point[TIP].y_s;  /* a free chain's base point */
+#else
+    const double y_base = 0.0;  /* the pivot, at height 0 */
+#endif
+    if (y_s - y_base > slack) {
+        *depth = y_s - y_base;
         return 0;
     }
-    for (int k = 0; k < MODEL_NPOINT - 1; ++k) {  /* the joints */
+    for (int k = 0; k < MODEL_NQ - 1; ++k) {  /* the joints */
         const double below = y_s - (h[k] + p->point[TIP].y_s);
         if (below > slack) {
             *depth = below;

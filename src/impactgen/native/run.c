@@ -39,7 +39,8 @@ static int under_floor(ig_solver *s, const model_params *p, double t, const doub
     const int point = model_machine_below(p, y, &depth);
     if (point == 0) return 0;
     char name[32];
-    if (point < MODEL_NPOINT) snprintf(name, sizeof name, "joint %d", point);
+    if (point < MODEL_NQ) snprintf(name, sizeof name, "joint %d", point);
+    else if (point > MODEL_NQ) snprintf(name, sizeof name, "the base point");  /* a free chain's, after the tip */
     else snprintf(name, sizeof name, "the tip");
     snprintf(s->message, sizeof s->message,
              "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of the shortest link, "

@@ -27,7 +27,7 @@ void ig_read_point(ig_point *point, double t, const double *y, const double *out
     point->t = t;
     point->T = out[MODEL_OUT_T];
     point->V = out[MODEL_OUT_V];
-    point->W_normal = y[2 * MODEL_NQ];
+    point->W_normal = y[MODEL_Y_W_normal];
 #ifdef MODEL_Y_W_friction
     point->W_friction = y[MODEL_Y_W_friction];
 #else
@@ -68,6 +68,7 @@ static void summarize_coefficients(const ig_tally *a, ig_summary *out)
 void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact)
 {
     memset(tally, 0, sizeof *tally);
+    tally->first_point = IG_NO_POINT;
     ig_read_point(&tally->start, t0, y0, out0);
     tally->last = tally->start;
     tally->t_sustained = NAN;
@@ -86,7 +87,7 @@ void ig_tally_start(ig_tally *tally, const model_machine *m, int start, double t
     for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the joints in contact from the start (the tip: above) */
         if (model_point_number(k) == MODEL_NQ || m->point[k].state == MODEL_MACHINE_FREE) continue;
         tally->joint_impacts++;
-        if (tally->first_point == 0) tally->first_point = model_point_number(k);
+        if (tally->first_point == IG_NO_POINT) tally->first_point = model_point_number(k);
     }
 }
 
@@ -126,7 +127,7 @@ static void fold_impact(ig_tally *a, double contact, int first_folded)
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
                           const double *out_buf)
 {
-    if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && a->first_point == 0) a->first_point = seg->point;
+    if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && a->first_point == IG_NO_POINT) a->first_point = seg->point;
     if (seg->point != MODEL_NQ) {  /* a joint's: counted; the summaries are the tip's (the chain's end) */
         if (seg->act & MODEL_ACT_IMPACT_BEGIN) a->joint_impacts++;
         return;

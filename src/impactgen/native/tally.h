@@ -9,6 +9,13 @@
 #include "model.h"
 #include "model_machine.h"
 
+/* first_point before any impact: 0, but for a free chain, whose base point is point 0 */
+#ifdef MODEL_FREE
+#define IG_NO_POINT (-1)
+#else
+#define IG_NO_POINT 0
+#endif
+
 /* cdef-begin: the declarations below are read by cffi as they stand. */
 /* One switch record of ig_run: contact point `point`'s segment (the time it spent in one
  * machine state and stick-slip state) ended at t, at the switch that event `event` began, and
@@ -27,7 +34,7 @@ typedef struct {
     int next_state;      /* the point's machine state after the switch */
     double next_slip;
     double delta_max, P_max, delta_r, R_res;  /* the point's impact record after the switch */
-    int point;           /* the point: 1 to MODEL_NQ - 1 joint k (the end of link k), MODEL_NQ the tip */
+    int point;           /* the point: 0 a free chain's base, 1 to MODEL_NQ - 1 joint k (the end of link k), MODEL_NQ the tip */
     model_params params; /* the parameters the run's segment ending at t ran under (the switch changes some) */
 } ig_segment;
 
@@ -49,7 +56,7 @@ typedef struct {
     ig_point first_begin, first_end;  /* the first impact's first and last samples */
     int impacts;                      /* impacts begun (the tip's) */
     int joint_impacts;                /* impacts begun at the joints */
-    int first_point;                  /* the point of the run's first impact (ig_segment.point); 0: none yet */
+    int first_point;                  /* the point of the run's first impact (ig_segment.point); IG_NO_POINT: none yet */
     int first_switches;               /* phase switches within the first impact */
     int first_stick_slip;             /* stick-slip changes within it (exact Coulomb) */
     int ended;                        /* impacts ended */
@@ -74,7 +81,8 @@ typedef struct {
     int n_switches, n_stick_slip;     /* the first impact's phase switches and stick-slip changes */
     int impacts;                      /* in the whole run, at the tip */
     int joint_impacts;                /* in the whole run, at the joints */
-    int first_point;                  /* where the run's first impact was: MODEL_NQ the tip, k joint k; 0: none */
+    int first_point;                  /* where the run's first impact was: MODEL_NQ the tip, k joint k (0: a free
+                                         chain's base); IG_NO_POINT: none */
     /* The first impact's impulses and coefficients of restitution (MODEL section 9), NAN while
      * it has not ended: the normal speed at its start v_n0 (m/s), the normal impulse of
      * compression P_c and of restitution P_r (split at maximum compression), the tangential

@@ -129,6 +129,26 @@ class Scene(_KeyHint):
         return self.chain.base == "free"
 
     @property
+    def dof(self) -> int:
+        """The generalized coordinates: the links' angles, and a free chain's base point's x, y."""
+        return self.n + (2 if self.free else 0)
+
+    def point_radius(self, number: int) -> float:
+        """The contact radius of contact point `number`, in m: a free chain's base point (0),
+        joint k (k), the tip (n)."""
+        if number == self.n:
+            return self.tip_radius
+        return self.base_radius if number == 0 else self.joint_radii[number - 1]
+
+    @property
+    def motion_start(self) -> tuple[float, ...]:
+        """The motion's state at the start, in the generated model's order: the angles (and a
+        free chain's base point), then their rates (and the base point's velocity)."""
+        if not self.free:
+            return self.q0 + self.u0
+        return self.q0 + self.base_start + self.u0 + self.base_velocity
+
+    @property
     def surface_angle(self) -> float:
         """The surface's inclination in radians (positive: it descends towards +x)."""
         return math.radians(self.surface_angle_deg)

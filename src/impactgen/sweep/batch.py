@@ -51,9 +51,12 @@ class Plan:
 
 def plan_for(scene: Scene, keys: tuple[str, ...]) -> Plan | None:
     """The plan for cases of `scene` varying `keys`, or None when the batch cannot take them
-    (a key that is no parameter nor initial element, or a scene whose warnings need the samples)."""
+    (a key that is no parameter nor initial element, a scene whose warnings need the samples, or
+    a free chain)."""
     if scene.contact.friction_mode == "frozen" and scene.contact.friction > 0:
         return None  # its warning reads the samples
+    if scene.free:
+        return None  # its initial state and start checks are a pinned chain's here: run case by case
     return _plan(scene, keys)
 
 

@@ -46,7 +46,7 @@ def run_case(out: "ChunkColumns", base: Scene, index: int, overrides: dict[str, 
     if keep_trajectory:
         out.trajectories[index] = trajectory_columns(result)  # with units
     record, status, message = result.summary_record, result.status, result.message
-    summary = (record, scene.n) if record is not None else None
+    summary = (record, (scene.n, scene.dof)) if record is not None else None
     warnings = " | ".join(result.warnings)
     del result  # freed within the case's time (about 4 us), as the engine's own loop frees it
     out.add(summary, status, message, warnings, time.perf_counter() - started)
@@ -56,9 +56,10 @@ SCALARS = (*SUMMARY_LEADING, "n_switches", "n_stick_slip")  # the summary's lead
 
 
 Record = tuple[bytes, np.dtype]  # a summary's C record and its dtype (SimulationResult.summary_record)
+# with each record, the model's links and coordinates (n, and a free chain's base point's two)
 
 
-def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.ndarray]:
+def summary_columns(records: list[tuple[Record, tuple[int, int]] | None]) -> dict[str, np.ndarray]:
     """The summaries of a chunk's cases (with their link counts) as the table's columns, as
     `SimulationResult.summary` names its fields: the lists counted (n_switches, ...) or spread
     (u_final[1], ...), the energy budget as energy.W_normal, ... The records of one model are
@@ -68,21 +69,21 @@ def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.nd
     first = records[0] if records else None
     if first is not None and all(r is not None and r[0][1] is first[0][1] for r in records):
         # the common chunk: one model (one session's dtype) for every case, its columns as they are
-        return _record_columns(np.frombuffer(b"".join(r[0][0] for r in records), first[0][1]), first[1])
+        return _record_columns(np.frombuffer(b"".join(r[0][0] for r in records), first[0][1]), *first[1])
     cases = [k for k, r in enumerate(records) if r is not None]
     if not cases:
         return {}
     models: dict[np.dtype, list[int]] = {}  # the cases of each record layout (one per model)
     for k in cases:
         models.setdefault(records[k][0][1], []).append(k)
-    n = max(records[k][1] for k in cases)
+    n = max(records[k][1][0] for k in cases)
     names = [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
              *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS),
              *(f"coefficients.{name}" for name in COEFFICIENTS)]
     columns = {name: np.full(len(records), np.nan) for name in names}
     integers: set[str] = set()
     for dtype, rows in models.items():
-        part = _record_columns(np.frombuffer(b"".join(records[k][0][0] for k in rows), dtype), records[rows[0]][1])
+        part = _record_columns(np.frombuffer(b"".join(records[k][0][0] for k in rows), dtype), *records[rows[0]][1])
         for name, values in part.items():
             columns[name][rows] = values
             if values.dtype.kind == "i":
@@ -92,12 +93,13 @@ def summary_columns(records: list[tuple[Record, int] | None]) -> dict[str, np.nd
     return columns
 
 
-def _record_columns(table: np.ndarray, n: int) -> dict[str, np.ndarray]:
-    """The columns of a structured array of summary records of an n-link model (contiguous,
-    integers as int64 as Python's ints make them)."""
+def _record_columns(table: np.ndarray, n: int, dof: int) -> dict[str, np.ndarray]:
+    """The columns of a structured array of summary records of an n-link model with `dof`
+    coordinates (n, and a free chain's base point's two; contiguous, integers as int64 as
+    Python's ints make them)."""
     y = table["y_final"]
     columns = {name: _column(table[name]) for name in SCALARS}
-    columns.update({f"u_final[{i + 1}]": y[:, n + i].copy() for i in range(n)})
+    columns.update({f"u_final[{i + 1}]": y[:, dof + i].copy() for i in range(n)})
     columns.update({f"q_final[{i + 1}]": y[:, i].copy() for i in range(n)})
     columns.update({name: _column(table[name]) for name in SUMMARY_LATER})
     columns.update({f"energy.{name}": _column(table[name]) for name in ENERGY_TERMS})
@@ -145,7 +147,7 @@ class ChunkColumns:
 
     def __init__(self, cases: execute.Chunk):
         self.cases = cases
-        self.summaries: list[tuple[Record, int] | None] = []  # with the case's link count
+        self.summaries: list[tuple[Record, tuple[int, int]] | None] = []  # with the case's links and coordinates
         self.status: list[str] = []
         self.message: list[str] = []
         self.warnings: list[str] = []
@@ -153,7 +155,7 @@ class ChunkColumns:
         self.trajectories: dict[int, dict[str, tuple[np.ndarray, str]]] = {}
         self.batch: batch.BatchRows | None = None  # every case's row, from one C call (instead of `add`)
 
-    def add(self, summary: tuple[Record, int] | None, status: str, message: str, warnings: str,
+    def add(self, summary: tuple[Record, tuple[int, int]] | None, status: str, message: str, warnings: str,
             wall_s: float) -> None:
         """The next case's row (the cases' order)."""
         self.summaries.append(summary)
@@ -172,7 +174,7 @@ class ChunkColumns:
         if ran is not None:
             n = len(self.cases)
             columns.update(status=["ok"] * n, message=[""] * n, warnings=[""] * n, wall_s=ran.wall_s)
-            return ChunkRows({**columns, **_record_columns(ran.records, ran.links)}, self.trajectories)
+            return ChunkRows({**columns, **_record_columns(ran.records, ran.links, ran.links)}, self.trajectories)
         columns.update(status=self.status, message=self.message, warnings=self.warnings,
                        wall_s=np.array(self.wall_s, dtype=float))
         return ChunkRows({**columns, **summary_columns(self.summaries)}, self.trajectories)
@@ -226,7 +228,7 @@ def run_chunk(scene_dict: dict[str, Any], cases: execute.Chunk, options: CaseOpt
         if ran.again[k]:
             run_case(out, base, index, overrides, index in options.keep_trajectories)
         else:
-            out.add(((ran.records[k].tobytes(), record), base.n), "ok", "", "", ran.wall_s[k])
+            out.add(((ran.records[k].tobytes(), record), (base.n, base.dof)), "ok", "", "", ran.wall_s[k])
     return out.rows()
 
 

@@ -21,7 +21,8 @@ void fmu_log_switch(const fmu_instance *c, double t, int point, int was, int now
                     int act)
 {
     char who[32] = "";
-    if (point != MODEL_NQ) snprintf(who, sizeof who, "joint %d: ", point);
+    if (point == 0) snprintf(who, sizeof who, "base: ");  /* a free chain's base point */
+    else if (point != MODEL_NQ) snprintf(who, sizeof who, "joint %d: ", point);
     if (now != was) {
         fmu_say(c, fmi2OK, "logEvents", "t = %.17g: %s%s -> %s", t, who, model_machine_state_name(was),
                 model_machine_state_name(now));

@@ -61,7 +61,7 @@ typedef struct {
     int logging;
     int mode;                    /* enum fmu_mode */
     model_params p;              /* inputs as set; derived and machine fields after initialization */
-    double q0[MODEL_NQ], u0[MODEL_NQ];
+    double q0[MODEL_NDOF], u0[MODEL_NDOF];  /* the angles (and a free chain's base point), their rates */
     double t;
     double t_done;               /* Model Exchange: the last completed step or event; time never goes before it */
     double y[MODEL_NSTATE];

@@ -55,6 +55,7 @@ static int went_through(fmu_instance *c)
     if (point == 0) return 0;
     char name[32];
     if (point < MODEL_NQ) snprintf(name, sizeof name, "joint %d", point);
+    else if (point > MODEL_NQ) snprintf(name, sizeof name, "the base point");  /* a free chain's, after the tip */
     else snprintf(name, sizeof name, "the tip");
     c->mode = FAILED;
     fmu_say(c, fmi2Error, "logStatusError", "%s is %.3g m below the surface at t = %.6g s (deeper than %g %% of "

@@ -22,9 +22,9 @@ void fmu_set_start_values(fmu_instance *c)
     double y0[MODEL_NSTATE];
     memset(&c->p, 0, sizeof c->p);
     model_scene_inputs(&c->p, y0);
-    for (int i = 0; i < MODEL_NQ; ++i) {
+    for (int i = 0; i < MODEL_NDOF; ++i) {  /* the angles (and a free chain's base point) */
         c->q0[i] = y0[i];
-        c->u0[i] = y0[MODEL_NQ + i];
+        c->u0[i] = y0[MODEL_NDOF + i];
     }
     c->t = c->t_done = c->start_time = 0.0;
     c->stop_time = FAR_FUTURE;
@@ -42,11 +42,11 @@ int fmu_prepare(fmu_instance *c, const char **range)
 {
     *range = "";
     if (c->start_ready) return MODEL_PARAMS_OK;
-    for (int i = 0; i < MODEL_NQ; ++i) {
+    for (int i = 0; i < MODEL_NDOF; ++i) {
         c->y[i] = c->q0[i];
-        c->y[MODEL_NQ + i] = c->u0[i];
+        c->y[MODEL_NDOF + i] = c->u0[i];
     }
-    for (int k = 2 * MODEL_NQ; k < MODEL_NSTATE; ++k) c->y[k] = 0.0;
+    for (int k = MODEL_NMOTION; k < MODEL_NSTATE; ++k) c->y[k] = 0.0;
     fmu_invalidate(c);
     const int bad = model_derive(&c->p, range);
     if (bad != MODEL_PARAMS_OK) return bad;
@@ -81,6 +81,13 @@ static void log_start_inside(const fmu_instance *c, int point, double depth)
         return;
     }
     char where[64];
+#ifdef MODEL_FREE
+    if (point == 0) {
+        fmu_say(c, fmi2Error, "logStatusError", "initial.base: the free chain's base point starts %.3g m inside "
+                "the surface (at y = %.6g m, the surface at y = %.6g m)", depth, y_s - depth, y_s);
+        return;
+    }
+#endif
     if (point == 0) snprintf(where, sizeof where, "its pivot end");
     else snprintf(where, sizeof where, "its lower end (joint %d)", point);
     fmu_say(c, fmi2Error, "logStatusError", "initial.q: link %d starts below the surface: %s is at y = %.6g m, "
