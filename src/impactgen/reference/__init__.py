@@ -6,10 +6,14 @@ right-hand side, the events, Radau's linear solves) the code avoids per-call ove
 changes no result, because the test suite runs this engine for minutes.
 
 - `chain`: the chain's equations, derived by hand with Lagrange's equations (not Kane's
-  method and sympy), and the kinematics of its points;
+  method and sympy), pinned or free (the base's coordinates after the angles), under gravity
+  in the frame of a level or inclined surface, and the kinematics of its points;
+- `body`: what the scene says of the base (pinned or free, where a free one starts) and of
+  the surface's angle;
 - `contact`: the contact laws of one point, written again from docs/model.md;
-- `model`: the chain with its contact points (every joint that can reach the surface, and
-  the tip as point n), the forces at the points in contact, the right-hand side, the outputs;
+- `model`: the chain with its contact points (a free chain's base as point 0, every joint
+  that can reach the surface, and the tip as point n), the forces at the points in contact,
+  the right-hand side, the outputs;
 - `events`: each point's root functions in its phase;
 - `machine`: the phase machine over points (transitions, switches, stick and slip);
 - `segment`: one phase integrated with scipy.integrate.solve_ivp and its terminal events;
@@ -22,6 +26,7 @@ the first contact, no point touches the surface.
 from __future__ import annotations
 
 from ..errors import SceneError, SolverError
+from .body import Body
 from .chain import HOLD_RCOND, ChainModel
 from .contact import Contact
 from .model import ContactPoint, PointForce, ReferenceModel, reachable_joints
@@ -29,6 +34,6 @@ from .result import PointImpact, ReferenceResult
 from .run import FLOOR_DEPTH, MAX_SEGMENTS, simulate
 from .segment import METHODS, Segment, solve_ivp_segment
 
-__all__ = ["ChainModel", "Contact", "ContactPoint", "FLOOR_DEPTH", "HOLD_RCOND", "MAX_SEGMENTS", "METHODS",
+__all__ = ["Body", "ChainModel", "Contact", "ContactPoint", "FLOOR_DEPTH", "HOLD_RCOND", "MAX_SEGMENTS", "METHODS",
            "PointForce", "PointImpact", "ReferenceModel", "ReferenceResult", "SceneError", "Segment",
            "SolverError", "reachable_joints", "simulate", "solve_ivp_segment"]

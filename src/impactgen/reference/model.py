@@ -112,7 +112,8 @@ class ReferenceModel:
         y_s = surface_height(scene, body)
         joints = [ContactPoint(k, point_name(k, scene.n), Contact.from_scene(scene, y_s, scene.joint_radii[k - 1]))
                   for k in reachable_joints(scene, y_s, body.free)]
-        base = ContactPoint(0, point_name(0, scene.n), Contact.from_scene(scene, y_s, body.base_radius)) if body.free else None
+        base = (ContactPoint(0, point_name(0, scene.n), Contact.from_scene(scene, y_s, body.base_radius))
+                if body.free else None)
         return cls(ChainModel.from_scene(scene, body.free, body.slope), Contact.from_scene(scene, y_s), scene.n,
                    scene.contact.friction > 0, joints, base, body)
 
