@@ -128,7 +128,7 @@ PARAMETERS: tuple[Parameter, ...] = (
               read=attrgetter("contact.restitution"), low=0.0, high=1.0, low_open=True),
     Parameter("stiffness", "contact.stiffness", "N/m", "the Kelvin-Voigt spring k", "input", needs="used",
               read=attrgetter("contact.stiffness"), **POSITIVE),
-    Parameter("damping", "contact.damping", "N s/m", "the Kelvin-Voigt dashpot c", "input", needs="used",
+    Parameter("damping", "contact.damping", "N.s/m", "the Kelvin-Voigt dashpot c", "input", needs="used",
               read=attrgetter("contact.damping"), low=0.0),
     Parameter("p_y", "contact.limiting_pressure", "Pa", "Thornton's limiting contact pressure p_y", "input",
               needs="used", read=attrgetter("contact.limiting_pressure"), **POSITIVE),
