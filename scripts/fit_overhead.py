@@ -4,12 +4,14 @@ times the API's time per impact.
 
     .venv/bin/python scripts/fit_overhead.py [--repeats 5]
 
-The API's time per impact is `impactgen.run_batch`'s (summary only, no samples), taken three
-ways: inside the fit (its time in run_batch over the impacts it simulated, the calls as the fit
-makes them: the rows at a point, or at every parameter's step); one call of the fit's 20 rows
-at the fitted values; one call of 2000 rows (the 20 repeated), the batch's throughput. Each
+The API's time per impact (summary only, no samples) is taken four ways: `impactgen.run_batch`
+inside the fit (its time in run_batch over the impacts it simulated, the calls as the fit makes
+them: the rows at a point, or at every parameter's step); one run_batch call of the fit's 20
+rows at the fitted values; one run_batch call of 2000 rows (the 20 repeated), the batch's
+throughput; and `impactgen.simulate(scene, record_steps=False)` of each of the 20 rows. Each
 figure is the median of --repeats runs, after one warm-up run (the model built, the modules
-imported).
+imported). The machine's other load moves the last three against the fit's wall time; the
+first is measured within the same runs.
 """
 from __future__ import annotations
 
@@ -54,10 +56,14 @@ def main() -> None:
     many = pd.concat([rows] * 100, ignore_index=True)
     per_call = _median_time(lambda: impactgen.run_batch(scene, rows), repeats) / len(rows)
     per_batch = _median_time(lambda: impactgen.run_batch(scene, many), repeats) / len(many)
+    scenes = [scene.replace(row) for row in rows.to_dict(orient="records")]
+    per_simulate = _median_time(lambda: [impactgen.simulate(s, record_steps=False, warn=False) for s in scenes],
+                                repeats) / len(scenes)
     print(f"fit of 2 parameters to {len(rows)} impacts: wall {wall * 1e3:.1f} ms, {n} impacts simulated "
           f"({result.best.evaluations} residual evaluations)")
     for name, per_impact in (("run_batch inside the fit", statistics.median(inside) / n),
-                             ("run_batch of the 20 rows", per_call), ("run_batch of 2000 rows", per_batch)):
+                             ("run_batch of the 20 rows", per_call), ("run_batch of 2000 rows", per_batch),
+                             ("simulate of each row", per_simulate)):
         ratio = wall / (n * per_impact)
         print(f"API time per impact, {name}: {per_impact * 1e3:.3f} ms; wall / (N x time per impact) = {ratio:.2f}")
 

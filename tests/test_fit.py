@@ -119,3 +119,21 @@ def test_bad_law_and_missing_file(tmp_path, capsys):
     assert "--law: unknown contact law 'nope'" in capsys.readouterr().err
     assert main(["fit", "paper", str(tmp_path / "none.csv"), "--fit", FIT]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_without_sigmas_the_errors_come_from_the_residuals():
+    """No sigma columns: each column weighed relative to its root mean square, the errors
+    scaled by the residual variance. With noise of 1 % of each column's RMS (what that
+    weighting assumes), the known values are within two standard errors."""
+    columns = ("delta_r", "u_final[1]", "u_final[2]")
+    exact = synthetic_measurements("paper", TRUTH, {"initial.u[2]": np.linspace(-0.15, -0.5, 8)}, columns, noise=0.0)
+    plain = exact[["initial.u[2]", *columns]].copy()
+    rng = np.random.default_rng(5)
+    for column in columns:
+        rms = np.sqrt(np.mean(plain[column] ** 2))
+        plain[column] += 0.01 * rms * rng.standard_normal(len(plain))
+    result = impactgen.fit("paper", plain, {"rod.yield_strength": (3e8, 1.1e9), "contact.friction": (0, 1)},
+                           tolerance=LOOSE)
+    assert not result.sigma_given and result.best.law == "three-phase"
+    for key, parameter in result.parameters.items():
+        assert parameter["determined"] and abs(parameter["value"] - TRUTH[key]) <= 2 * parameter["stderr"], key

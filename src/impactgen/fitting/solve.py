@@ -227,6 +227,9 @@ def fit_law(scene: Scene, law: str, parameters: list[FitParameter], data: Measur
     solution = least_squares(model.residuals, x0, jac=model.jacobian, bounds=(low, high), method="trf",
                              ftol=tolerance, xtol=tolerance, gtol=tolerance, max_nfev=MAX_EVALUATIONS)
     x, r, J = solution.x, solution.fun, solution.jac  # the solver's Jacobian is ours at x (linear loss)
+    if model.last is not None and np.array_equal(model.last[0], x):
+        from ..sweep.run import warn_validity
+        warn_validity(model.last[2])  # the rows at the values found: outside the model's range, say so
     chi2 = float(r @ r)
     count, k = len(r), len(parameters)
     stderr, determined, correlation = covariance(J, chi2, count, data.sigma is not None)
