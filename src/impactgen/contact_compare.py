@@ -140,7 +140,7 @@ def speed_cases(scene: Scene, speeds: np.ndarray) -> dict[str, np.ndarray]:
     """
     if scene["surface.height"] != "initial":
         raise SceneError("--speeds", "sets the normal impact speed through the initial speeds, so the "
-                                     "tip must start on the surface: give --set surface.height='\"initial\"'")
+                                     "tip must start on the surface: give --set surface.height=initial")
     v_n = normal_speed(scene)
     if not v_n < 0:
         raise SceneError("--speeds", f"the scene's initial.u moves the tip away from the surface "

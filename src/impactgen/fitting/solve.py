@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..errors import SceneError, SolverError, excerpt
+from ..errors import SceneError, SolverError, ValidityWarning, excerpt
 from ..scene import Scene
 from .data import FitParameter, Measurements
 
@@ -135,9 +136,6 @@ class _Model:
         for j, p in enumerate(self.parameters):
             cases[p.key] = np.repeat([x[j] * self.scale[j] for x in points], rows).tolist()
         self.impacts += rows * len(points)
-        import warnings
-
-        from ..errors import ValidityWarning
         started = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ValidityWarning)  # the trial points are the solver's, not the user's
@@ -159,7 +157,7 @@ class _Model:
         """The weighted residuals at x (the last point's kept: the solver asks for the
         residuals and then the Jacobian of the same point)."""
         if self.last is not None and np.array_equal(self.last[0], x):
-            return self.last[1]
+            return self.last[1].copy()
         self.evaluations += 1
         table = self.run([x])
         r = self.residuals_of(self.model_values(table, 0))
