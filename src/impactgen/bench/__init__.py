@@ -1,17 +1,22 @@
 """Benchmarks: error against run time, right-hand-side cost, build cost as n grows, and sweeps."""
 from __future__ import annotations
 
+import importlib
 import time
 from pathlib import Path
 
 
 FULL_LINKS = (2, 3, 5, 10, 20, 30)  # the chain lengths the growth with n is measured at
 QUICK_LINKS = (2, 3, 5)
+# the parts `impactgen bench --parts` runs, by default all but "batch" (a million cases: minutes)
+PARTS = ("workprecision", "rhs", "scaling", "sweep", "points", "free", "laws", "batch")
+DEFAULT_PARTS = tuple(p for p in PARTS if p != "batch")
 
 
 def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
-    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep", "points", "batch") and write the
-    report ("batch" is not among the default parts: a million cases take minutes)."""
+    """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep", "points", "free", "laws",
+    "batch") and write the report ("batch" is not among the default parts: a million cases take
+    minutes)."""
     from .report import write_report
     from .rhs import rhs_benchmark
     from .scaling import scaling
@@ -41,5 +46,10 @@ def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     if "points" in parts:
         from .points import points_benchmark
         points_result = points_benchmark(quick)
+    extra = {}  # the parts of one scene each, with their targets and their report's lines
+    for name, module in (("free", "free_bodies"), ("laws", "laws")):
+        if name in parts:
+            part = importlib.import_module(f".{module}", __name__)
+            extra[name] = (part, part.benchmark(quick))
     return write_report(out, "quick" if quick else "full", runs, truths, notes, rhs_rows, scaling_rows,
-                        time.perf_counter() - started, sweep_result, c_loop, in_turn, points_result)
+                        time.perf_counter() - started, sweep_result, c_loop, in_turn, points_result, extra)

@@ -200,7 +200,9 @@ def where_the_time_goes(c_loop: dict) -> list[str]:
 def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], notes: list[str],
                  rhs_rows: list[dict], scaling_rows: list[dict], elapsed_s: float,
                  sweep_result: dict | None = None, c_loop: dict | None = None, in_turn: dict | None = None,
-                 points_result: dict | None = None) -> Path:
+                 points_result: dict | None = None, extra: dict | None = None) -> Path:
+    """Write benchmark.json, the figures and report.md. `extra` maps a part's name to its module
+    (with `targets` and `report_lines`) and its result."""
     out.mkdir(parents=True, exist_ok=True)
     info = machine()
     _write_csv(out / "workprecision.csv", [asdict(r) for r in runs])
@@ -212,11 +214,15 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
     points_result = points_result or {}
     goals = (targets(runs, rhs_rows, scaling_rows, c_loop, in_turn) + sweep_targets(sweep_result)
              + points_targets(points_result))
+    extra = extra or {}
+    for part, result in extra.values():
+        goals += part.targets(result)
     (out / "benchmark.json").write_text(json.dumps({
         "mode": mode, "machine": info, "elapsed_s": elapsed_s, "notes": notes,
         "truth": [asdict(t) for t in truths], "runs": [asdict(r) for r in runs],
         "speedups_at_rtol_1e-8": summary, "targets": goals, "rhs": rhs_rows, "scaling": scaling_rows,
         "sweep": sweep_result, "c_loop": c_loop or {}, "in_turn": in_turn or {}, "points": points_result,
+        **{name: result for name, (_, result) in extra.items()},
     }, indent=1, default=lambda v: None))
     figures = [plot_workprecision(runs, s, out) for s in scenes]
     if rhs_rows:
@@ -334,6 +340,8 @@ def write_report(out: Path, mode: str, runs: list[Run], truths: list[Truth], not
     if sweep_result:
         lines += sweep_report_lines(sweep_result)
     lines += points_report_lines(points_result)
+    for part, result in extra.values():
+        lines += part.report_lines(result)
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path

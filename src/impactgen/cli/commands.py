@@ -325,11 +325,11 @@ def _crosscheck(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from ..bench import run_benchmarks
+    from ..bench import PARTS, run_benchmarks
     parts = {p.strip() for p in args.parts.split(",") if p.strip()}
-    unknown = parts - {"workprecision", "rhs", "scaling", "sweep", "points", "batch"}
+    unknown = parts - set(PARTS)
     if unknown or not parts:
-        raise SceneError("--parts", f"choose from workprecision, rhs, scaling, sweep, points, batch (got {args.parts!r})")
+        raise SceneError("--parts", f"choose from {', '.join(PARTS)} (got {args.parts!r})")
     report = run_benchmarks(args.out, args.quick, parts)
     for goal in json.loads((report.parent / "benchmark.json").read_text())["targets"]:
         print(f"{goal['verdict']:>12}  {goal['measured']:<24} {goal['target']}")

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..bench import DEFAULT_PARTS
 from ..errors import SceneError
 from .generated import MAX_PREFIX_LENGTH
 
@@ -168,8 +169,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="work-precision, RHS and scaling benchmarks with a report")
     bench.add_argument("--quick", action="store_true", help="a smaller run (under 3 minutes)")
     bench.add_argument("--out", type=Path, default=Path("bench-results"), help="report folder")
-    bench.add_argument("--parts", default="workprecision,rhs,scaling,sweep,points",
-                       help="which benchmarks, comma-separated (workprecision, rhs, scaling, sweep, points; batch, not by default: a million sweep cases against the C loop, minutes)")
+    bench.add_argument("--parts", default=",".join(DEFAULT_PARTS),
+                       help=f"which benchmarks, comma-separated ({', '.join(DEFAULT_PARTS)}; batch, not by "
+                            "default: a million sweep cases against the C loop, minutes)")
     bench.add_argument("--debug", action="store_true", help="show tracebacks")
 
     stab = sub.add_parser("stability", help="run the catalogue of stiff and extreme cases")
