@@ -137,3 +137,33 @@ def test_without_sigmas_the_errors_come_from_the_residuals():
     assert not result.sigma_given and result.best.law == "three-phase"
     for key, parameter in result.parameters.items():
         assert parameter["determined"] and abs(parameter["value"] - TRUTH[key]) <= 2 * parameter["stderr"], key
+
+
+def test_each_law_is_fitted_in_its_own_keys_and_the_true_one_ranks_first():
+    """Impacts made by the Hunt-Crossley law (e = 0.6, mu = 0.25): its own key
+    contact.restitution is fitted for it and left out of the three-phase fit (a three-phase
+    scene refuses it), and the law that made the data ranks first."""
+    truth = {"contact.restitution": 0.6, "contact.friction": 0.25}
+    made_by = impactgen.load_scene("paper", {"contact.model": "hunt-crossley", "contact.restitution": 0.6})
+    data = synthetic_measurements(made_by, truth, {"initial.u[2]": np.linspace(-0.15, -0.5, 6)},
+                                  ("t_contact", "u_final[1]", "u_final[2]"), noise=0.01, seed=5)
+    result = impactgen.fit("paper", data, "contact.restitution=0.2..0.95,contact.friction=0..1",
+                           laws="three-phase,hunt-crossley", tolerance=LOOSE)
+    fits = {f.law: f for f in result.laws}
+    assert [p.key for p in fits["three-phase"].parameters] == ["contact.friction"]
+    assert [f.law for f in result.laws][0] == "hunt-crossley"
+    hc = fits["hunt-crossley"]
+    for key, value, stderr in zip((p.key for p in hc.parameters), hc.values, hc.stderr):
+        assert abs(value - truth[key]) <= 2 * stderr, key
+
+
+def test_compare_gives_each_law_the_keys_it_reads(capsys):
+    """--set of a law's own key goes to the laws that read it, not to the paper's law (which
+    would refuse it)."""
+    assert main(["compare", "paper", "--laws", "three-phase,hunt-crossley,kelvin-voigt", "--json",
+                 "--set", "contact.restitution=0.64", "--set", "contact.stiffness=2e7",
+                 "--set", "contact.damping=800"]) == 0
+    rows = {row["law"]: row for row in json.loads(capsys.readouterr().out)["rows"]}
+    assert set(rows) == {"three-phase", "hunt-crossley", "kelvin-voigt"}
+    assert all(row["status"] == "ok" for row in rows.values())
+    assert rows["hunt-crossley"]["delta_r"] == 0 < rows["three-phase"]["delta_r"]

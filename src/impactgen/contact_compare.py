@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from .codegen.spec import LAW_KEYS
 from .errors import SceneError
 from .scene import CONTACT_MODELS, Scene
 
@@ -51,12 +52,37 @@ def check_laws(laws: str | Sequence[str], flag: str = "--laws") -> tuple[str, ..
     return tuple(dict.fromkeys(names))
 
 
-def first_impact_scene(scene: Scene, law: str) -> Scene:
-    """`scene` under `law`, run to the end of its first impact."""
-    return scene.replace({"contact.model": law, "solver.t_end": "separation"})
+def law_keys(settings: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The keys among `settings` that belong to some law (contact.restitution, ...): what
+    `under_law` gives each law that reads them."""
+    every = {key for keys in LAW_KEYS.values() for key in keys}
+    return {key: value for key, value in (settings or {}).items() if key in every}
 
 
-def compare_contact_laws(scene: Scene | str, laws: str | Sequence[str]):
+def under_law(scene: Scene, law: str, settings: Mapping[str, Any] | None = None) -> Scene:
+    """`scene` under contact law `law`: the other laws' keys dropped (a scene refuses a key its
+    law does not read), the law's own taken from `settings` where given there, else kept.
+
+    Raises
+    ------
+    SceneError
+        The law needs a key that neither the scene nor `settings` gives (named, with the law).
+    """
+    own = LAW_KEYS.get(law, ())
+    change: dict[str, Any] = {"contact.model": law}
+    change.update({key: None for keys in LAW_KEYS.values() for key in keys
+                   if key not in own and scene[key] is not None})
+    change.update({key: value for key, value in (settings or {}).items() if key in own})
+    return scene.replace(change)
+
+
+def first_impact_scene(scene: Scene, law: str, settings: Mapping[str, Any] | None = None) -> Scene:
+    """`scene` under `law` (`under_law`), run to the end of its first impact."""
+    return under_law(scene, law, settings).replace({"solver.t_end": "separation"})
+
+
+def compare_contact_laws(scene: Scene | str, laws: str | Sequence[str],
+                         settings: Mapping[str, Any] | None = None):
     """The scene's first impact under each contact law, one row per law.
 
     Parameters
@@ -66,6 +92,9 @@ def compare_contact_laws(scene: Scene | str, laws: str | Sequence[str]):
         and it is run to the end of its first impact.
     laws : str or sequence of str
         Contact laws the scene accepts (``"three-phase,hertz"`` or a list).
+    settings : mapping, optional
+        The laws' own keys (``{"contact.restitution": 0.8, "contact.stiffness": 2e7}``), each
+        given to the laws that read it; the scene's own are kept where `settings` lacks them.
 
     Returns
     -------
@@ -90,7 +119,7 @@ def compare_contact_laws(scene: Scene | str, laws: str | Sequence[str]):
     rows = []
     for law in laws:
         # one case: the scene as it is (its first initial speed as the one "varied" value)
-        table = run_batch(first_impact_scene(scene, law), {"initial.u[1]": [scene["initial.u[1]"]]})
+        table = run_batch(first_impact_scene(scene, law, settings), {"initial.u[1]": [scene["initial.u[1]"]]})
         row = table.iloc[0]
         rows.append({"law": law, "status": row["status"], "message": row["message"],
                      **{name: float(row[name]) for name in (*TABLE_COLUMNS, "coefficients.e_P")}})
@@ -149,7 +178,8 @@ def speed_cases(scene: Scene, speeds: np.ndarray) -> dict[str, np.ndarray]:
     return {f"initial.u[{i + 1}]": u0[i] * speeds / -v_n for i in range(scene.n)}
 
 
-def speed_sweep(scene: Scene | str, laws: str | Sequence[str], speeds: Sequence[float]):
+def speed_sweep(scene: Scene | str, laws: str | Sequence[str], speeds: Sequence[float],
+                settings: Mapping[str, Any] | None = None):
     """Each law's first impact over a range of normal impact speeds.
 
     Parameters
@@ -160,6 +190,8 @@ def speed_sweep(scene: Scene | str, laws: str | Sequence[str], speeds: Sequence[
         Contact laws the scene accepts.
     speeds : sequence of float
         Normal impact speeds in m/s (> 0); `initial.u` is scaled to each.
+    settings : mapping, optional
+        The laws' own keys, as in `compare_contact_laws`.
 
     Returns
     -------
@@ -175,7 +207,7 @@ def speed_sweep(scene: Scene | str, laws: str | Sequence[str], speeds: Sequence[
     cases = speed_cases(scene, speeds)
     parts = []
     for law in laws:
-        table = run_batch(first_impact_scene(scene, law), cases)
+        table = run_batch(first_impact_scene(scene, law, settings), cases)
         table.insert(0, "speed", speeds)
         table.insert(0, "law", law)
         parts.append(table)

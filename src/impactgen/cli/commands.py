@@ -72,9 +72,9 @@ def _compare(args: argparse.Namespace) -> int:
     """impactgen compare: the compliant impact and the rigid laws given its coefficients."""
     import impactgen
     from ..compare import format_comparison
-    scene = impactgen.load_scene(args.scene, _overrides(args.set))
     if args.laws is not None or args.speeds is not None:
-        return _compare_contact_laws(args, scene)
+        return _compare_contact_laws(args)
+    scene = impactgen.load_scene(args.scene, _overrides(args.set))
     if args.out is not None:
         raise SceneError("--out", "is the figure of --speeds: give --speeds LOW..HIGH[:N]")
     table = impactgen.compare_laws(scene, engine=args.engine)
@@ -86,9 +86,21 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
-def _compare_contact_laws(args: argparse.Namespace, scene) -> int:
+def _law_split(args: argparse.Namespace):
+    """The scene of `args` and the laws' own keys among its --set (contact.restitution, ...):
+    the scene takes those its own law reads, and each law of --laws those it reads."""
+    import impactgen
+    from ..contact_compare import law_keys, under_law
+    overrides = _overrides(args.set)
+    settings = law_keys(overrides)
+    scene = impactgen.load_scene(args.scene, {k: v for k, v in overrides.items() if k not in settings})
+    return under_law(scene, scene["contact.model"], settings), settings
+
+
+def _compare_contact_laws(args: argparse.Namespace) -> int:
     """impactgen compare --laws/--speeds: the contact laws side by side, in C (run_batch)."""
     from .. import contact_compare as cc
+    scene, settings = _law_split(args)
     if args.engine != "c":
         raise SceneError("--engine", "compare --laws and --speeds run in C (impactgen.run_batch); "
                                      "leave out --engine reference")
@@ -96,11 +108,11 @@ def _compare_contact_laws(args: argparse.Namespace, scene) -> int:
     speeds = cc.parse_speeds(args.speeds) if args.speeds is not None else None
     if speeds is None and args.out is not None:
         raise SceneError("--out", "is the figure of --speeds: give --speeds LOW..HIGH[:N]")
-    table = cc.compare_contact_laws(scene, laws)
+    table = cc.compare_contact_laws(scene, laws, settings)
     out = {"scene": scene.name, "rows": [{k: _json_number(v) for k, v in r.items()}
                                          for r in table.to_dict(orient="records")]}
     if speeds is not None:
-        frame = cc.speed_sweep(scene, laws, speeds)
+        frame = cc.speed_sweep(scene, laws, speeds, settings)
         figure = cc.plot_speed_sweep(frame, args.out or Path(f"{scene.name}-laws.png"),
                                      f"{scene.name}: first impact against the normal impact speed")
         out.update({"speeds": cc.speeds_json(frame), "figure": str(figure)})
@@ -118,11 +130,11 @@ def _fit(args: argparse.Namespace) -> int:
     """impactgen fit: scene keys fitted to measured impacts, with their errors (docs/fitting.md)."""
     import impactgen
     from ..fitting.report import fit_json, format_fit, plot_fit
-    scene = impactgen.load_scene(args.scene, _overrides(args.set))
+    scene, settings = _law_split(args)
     out = args.out or Path(f"{scene.name}-fit.png")
     if out.suffix.lower() != ".png":
         raise SceneError("--out", f"the figure is a PNG file: give a name ending in .png, got {out}")
-    result = impactgen.fit(scene, args.data, args.fit, laws=args.law)
+    result = impactgen.fit(scene, args.data, args.fit, laws=args.law, settings=settings)
     figure = plot_fit(result, out)
     if args.json:
         print(json.dumps({**fit_json(result), "figure": str(figure)}))

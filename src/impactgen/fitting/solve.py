@@ -20,10 +20,11 @@ import math
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
+from ..codegen.spec import LAW_KEYS
 from ..errors import SceneError, SolverError, ValidityWarning, excerpt
 from ..scene import Scene
 from .data import FitParameter, Measurements
@@ -214,10 +215,13 @@ def check_start(model: _Model, x0: np.ndarray) -> None:
 
 
 def fit_law(scene: Scene, law: str, parameters: list[FitParameter], data: Measurements,
-            tolerance: float = 1e-8) -> LawFit:
-    """One law's least-squares fit (see the module's docstring for the weighting and errors)."""
+            tolerance: float = 1e-8, settings: Mapping[str, Any] | None = None) -> LawFit:
+    """One law's least-squares fit (see the module's docstring for the weighting and errors),
+    the scene under `law` with the laws' fixed `settings` and the parameters' start values."""
     from scipy.optimize import least_squares
-    model = _Model(scene.replace({"contact.model": law}), parameters, data)
+    from ..contact_compare import under_law
+    model = _Model(under_law(scene, law, {**(settings or {}), **{p.key: p.start for p in parameters}}),
+                   parameters, data)
     x0 = np.array([p.start for p in parameters]) / model.scale
     check_start(model, x0)
     low = np.array([p.low for p in parameters]) / model.scale
@@ -275,7 +279,15 @@ def covariance(J: np.ndarray, chi2: float, count: int, sigma_given: bool
     return stderr, determined, correlation
 
 
-def fit(scene: Scene | str, data: Any, parameters: Any, laws: Any = None, tolerance: float = 1e-8) -> FitResult:
+def law_parameters(parameters: list[FitParameter], law: str) -> list[FitParameter]:
+    """The fitted parameters `law` takes: all but the other laws' own keys (a Hunt-Crossley
+    fit takes contact.restitution, a three-phase fit of the same data leaves it out)."""
+    theirs = {key for name, keys in LAW_KEYS.items() if name != law for key in keys} - set(LAW_KEYS.get(law, ()))
+    return [p for p in parameters if p.key not in theirs]
+
+
+def fit(scene: Scene | str, data: Any, parameters: Any, laws: Any = None, tolerance: float = 1e-8,
+        settings: Mapping[str, Any] | None = None) -> FitResult:
     """Fit scene parameters to measured impacts by least squares, with the compiled model.
 
     Parameters
@@ -292,8 +304,12 @@ def fit(scene: Scene | str, data: Any, parameters: Any, laws: Any = None, tolera
         items, or a mapping of key to None or (low, high). Each starts at its scene value
         (the middle of its bounds if that lies outside them).
     laws : str or sequence of str, optional
-        Contact laws to fit each in turn and rank (``"three-phase,hertz"``); default the
-        scene's own `contact.model`.
+        Contact laws to fit each in turn and rank (``"three-phase,hunt-crossley"``); default
+        the scene's own `contact.model`. Each law is fitted in the parameters it takes: a
+        law's own key (``contact.restitution``) is left out of the other laws' fits.
+    settings : mapping, optional
+        Laws' own keys held fixed (``{"contact.restitution": 0.8}``), each given to the laws
+        that read it.
     tolerance : float
         The solver's ftol, xtol and gtol (scipy.optimize.least_squares).
 
@@ -326,7 +342,8 @@ def fit(scene: Scene | str, data: Any, parameters: Any, laws: Any = None, tolera
     law_names = check_laws(laws if laws is not None else [scene["contact.model"]], "--law")
     fitted = parse_fit(parameters, scene)
     measurements = read_measurements(data, scene, [p.key for p in fitted])
-    fits = [fit_law(scene, law, fitted, measurements, tolerance) for law in law_names]
+    fits = [fit_law(scene, law, law_parameters(fitted, law), measurements, tolerance, settings)
+            for law in law_names]
     fits.sort(key=lambda f: (not math.isfinite(f.aic), f.aic))
     return FitResult(fits, measurements, measurements.sigma is not None, time.perf_counter() - started,
                      sum(f.impacts for f in fits), sum(f.batch_s for f in fits), scene.name)
