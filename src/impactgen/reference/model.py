@@ -199,9 +199,8 @@ class ReferenceModel:
     def outputs(self, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
         """The outputs at samples y (N, nstate), as the C engine names them: point n's position,
         speed, penetration and forces (x_B, ..., F, F_f: the tip's), the energies, and each
-        joint's penetration and normal force (delta_Jk, F_Jk); a free chain's base point's
-        position, speed, penetration and normal force (x_base, y_base, v_base_x, v_base_y,
-        delta_base, F_base)."""
+        joint's penetration and normal force (delta_Jk, F_Jk), a free chain's base point's as
+        point 0 (delta_J0, F_J0: its position and speed are the states x_0, ..., u_y0)."""
         n, tip, dof = self.n, self.tip, self.dof
         q, u = y[:, :dof].T, y[:, dof:2 * dof].T
         x_B, y_B, v_Bx, v_By = self.chain.point(q, u, n)
@@ -213,15 +212,9 @@ class ReferenceModel:
         T, V = self.chain.energies(q, u)
         out.update({f"T{i + 1}": T[i] for i in range(n)})
         out["T"], out["V"] = T.sum(0), V
-        for p in self.joints:
+        for p in self.points[:-1]:  # the base and the joints
             _, y_k, _, v_k = self.chain.point(q, u, p.index)
             delta_k = p.contact.y_s - y_k
             out[f"delta_J{p.index}"] = delta_k
             out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d, -v) for d, v in zip(delta_k, v_k)])
-        if self.base is not None:
-            base = self.base
-            x_0, y_0, v_0x, v_0y = q[n], q[n + 1], u[n], u[n + 1]
-            delta_0 = base.contact.y_s - y_0
-            out.update({"x_base": x_0, "y_base": y_0, "v_base_x": v_0x, "v_base_y": v_0y, "delta_base": delta_0,
-                        "F_base": np.array([base.contact.normal_force(base.phase, d, -v) for d, v in zip(delta_0, v_0y)])})
         return out
