@@ -266,7 +266,8 @@ def _heights(chain: ChainEquations) -> tuple[Named, ...]:
 
 def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:
     """What the phase machine's switch laws read besides the force laws: E* and R for the
-    contact scales and the unloading radius, delta_c for Eq. 12 and the yield onset."""
+    contact scales and the unloading radius, delta_c for Eq. 12 and the yield onset (Thornton's
+    delta_y, F_y and k_y for his); a damped law's v0 and the depth it let go at."""
     if spec.contact_model == "thornton":
         return (law.E_star, law.R, law.delta_r, law.R_res, law.delta_y, law.F_y, law.k_y)
     return (law.E_star, law.R) + ((law.delta_c, law.delta_r, law.R_res) if spec.plastic else ()) + (

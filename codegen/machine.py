@@ -44,9 +44,8 @@ class SwitchLaws:
 
 def switch_laws(model: ModelExpressions, ccode) -> SwitchLaws:
     spec = model.spec
-    steps = law.material_constants() + law.law_constants(spec.contact_model)
-    derive = tuple((str(name), ccode(expr)) for name, expr in steps)
-    own = law.law_constants(spec.contact_model)
+    own = law.law_constants(spec.contact_model)  # after the materials' constants, which they read
+    derive = tuple((str(name), ccode(expr)) for name, expr in law.material_constants() + own)
     read = set().union(*(sm.sympify(e).free_symbols for _, e in own))
     inputs = tuple(str(x) for x in law.LAW_INPUTS.get(spec.contact_model, ()) if x in read)
     if not spec.plastic:
