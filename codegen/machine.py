@@ -52,9 +52,11 @@ def switch_laws(model: ModelExpressions, ccode) -> SwitchLaws:
         return SwitchLaws(derive, None, None, None, inputs)
     delta_m = sm.Symbol("delta_m")
     if spec.contact_model == "thornton":
-        return SwitchLaws(derive, residual=ccode(law.thornton_residual()), unloading_radius=ccode(law.unloading_radius()),
+        residual = law.thornton_residual()
+        reads = tuple(sorted(str(x) for x in residual.free_symbols if x != law.delta_max))  # (R cancels out)
+        return SwitchLaws(derive, residual=ccode(residual), unloading_radius=ccode(law.unloading_radius()),
                           yielded=ccode(sm.GreaterThan(delta_m, law.delta_y)), inputs=inputs,
-                          residual_reads=("R", "delta_y", "F_y", "k_y"), yielded_reads=("delta_m", "delta_y"))
+                          residual_reads=reads, yielded_reads=("delta_m", "delta_y"))
     return SwitchLaws(
         derive,
         residual=ccode(law.residual_deformation()),

@@ -198,3 +198,16 @@ def test_a_point_back_before_it_left_the_surface_begins_a_new_impact_where_it_le
     assert c.impacts[1].t_start == pytest.approx(ref.impacts[1].t_start, rel=1e-7)
     for quantity, value in crosscheck.compare(c, ref).items():
         assert value < 1e-7, quantity
+
+
+@pytest.mark.parametrize("law", ["kelvin-voigt", "thornton"])
+def test_the_c_driver_runs_the_law_the_scene_generates(law, tmp_path, c_driver):
+    from test_c_driver import FIELDS, build_and_run
+    scene = impactgen.load_scene(PAPER, overrides={"contact.model": law, **PAPER_LAWS[law]})
+    path = tmp_path / "scene.toml"
+    path.write_text(scene.to_toml())
+    printed = build_and_run(str(path), tmp_path / "model", c_driver)
+    s = impactgen.simulate(scene).first_impact
+    assert printed["status"] == "ok"
+    for name in FIELDS:
+        assert float(printed[name]) == pytest.approx(s[name], rel=1e-8), name
