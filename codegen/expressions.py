@@ -196,6 +196,8 @@ def assemble_model(spec: ModelSpec) -> ModelExpressions:
         events.append(Named("yield", d - law.YIELD_ONSET * law.delta_c, "delta = 1.9 delta_c: onset of phase II"))
     if spec.plastic:
         events.append(Named("separation", d - law.delta_r, "delta = delta_r: the tip leaves the dented surface"))
+    elif spec.rate_law:  # watched in free flight: back where a damped law let go while penetrating
+        events.append(Named("separation", d - law.delta_r, "delta = delta_r: where the tip let go of the surface"))
     events.append(Named("passes_delta_m", d - delta_m, "delta = delta_m: reloading passes the maximum"))
     if spec.rate_law:
         events.append(Named("force_zero", law.force_zero(spec.contact_model),
@@ -280,11 +282,12 @@ def _heights(chain: ChainEquations, spec: ModelSpec) -> tuple[Named, ...]:
 
 def machine_symbols(spec: ModelSpec) -> tuple[sm.Symbol, ...]:
     """What the phase machine's switch laws read besides the force laws: E* and R for the
-    contact scales and the unloading radius, delta_c for Eq. 12 and the yield onset."""
+    contact scales and the unloading radius, delta_c for Eq. 12 and the yield onset (Thornton's
+    delta_y, F_y and k_y for his); a damped law's v0 and the depth it let go at."""
     if spec.contact_model == "thornton":
         return (law.E_star, law.R, law.delta_r, law.R_res, law.delta_y, law.F_y, law.k_y)
     return (law.E_star, law.R) + ((law.delta_c, law.delta_r, law.R_res) if spec.plastic else ()) + (
-        (law.v_0,) if spec.rate_law else ())
+        (law.v_0, law.delta_r) if spec.rate_law else ())
 
 
 def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase, ...],

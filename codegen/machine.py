@@ -44,18 +44,19 @@ class SwitchLaws:
 
 def switch_laws(model: ModelExpressions, ccode) -> SwitchLaws:
     spec = model.spec
-    steps = law.material_constants() + law.law_constants(spec.contact_model)
-    derive = tuple((str(name), ccode(expr)) for name, expr in steps)
-    own = law.law_constants(spec.contact_model)
+    own = law.law_constants(spec.contact_model)  # after the materials' constants, which they read
+    derive = tuple((str(name), ccode(expr)) for name, expr in law.material_constants() + own)
     read = set().union(*(sm.sympify(e).free_symbols for _, e in own))
     inputs = tuple(str(x) for x in law.LAW_INPUTS.get(spec.contact_model, ()) if x in read)
     if not spec.plastic:
         return SwitchLaws(derive, None, None, None, inputs)
     delta_m = sm.Symbol("delta_m")
     if spec.contact_model == "thornton":
-        return SwitchLaws(derive, residual=ccode(law.thornton_residual()), unloading_radius=ccode(law.unloading_radius()),
+        residual = law.thornton_residual()
+        reads = tuple(sorted(str(x) for x in residual.free_symbols if x != law.delta_max))  # (R cancels out)
+        return SwitchLaws(derive, residual=ccode(residual), unloading_radius=ccode(law.unloading_radius()),
                           yielded=ccode(sm.GreaterThan(delta_m, law.delta_y)), inputs=inputs,
-                          residual_reads=("R", "delta_y", "F_y", "k_y"), yielded_reads=("delta_m", "delta_y"))
+                          residual_reads=reads, yielded_reads=("delta_m", "delta_y"))
     return SwitchLaws(
         derive,
         residual=ccode(law.residual_deformation()),

@@ -90,6 +90,8 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
 #if MODEL_PLASTIC
         c->delta_r = 0.0;
         c->R_res = c->R;
+#elif MODEL_RATE_LAW
+        c->delta_r = 0.0;
 #endif
     }
     impact_scales(p, c->R, o.v_x, o.v_y, fmax(o.delta_rate, 0.0), out[MODEL_OUT_T], y, r->scale);
@@ -124,6 +126,8 @@ static void starts_free(model_machine *m, model_params *p, int point, double y_s
 #if MODEL_PLASTIC
     c->delta_r = 0.0;
     c->R_res = c->R;
+#elif MODEL_RATE_LAW
+    c->delta_r = 0.0;
 #endif
 #if MODEL_COULOMB
     c->slip = r->slip;
@@ -180,10 +184,11 @@ static int watch_state(int state, int base, int *events, int *directions)
     switch (state) {
     case MODEL_MACHINE_FREE:
         WATCH(MODEL_EVENT_CONTACT, RISING);
-#if MODEL_PLASTIC
+#if MODEL_PLASTIC || MODEL_RATE_LAW
         /* a point that separated inside its dent (delta = delta_r > 0) and comes back down
          * before it has left the surface never sees delta rise through 0: at its return to
-         * delta_r it reloads along its restitution curve, a new impact in the same dent */
+         * delta_r it reloads along its restitution curve, a new impact in the same dent (a
+         * damped law that let go while penetrating: a new impact where it let go) */
         WATCH(MODEL_EVENT_SEPARATION, RISING);
 #endif
         break;
@@ -370,8 +375,9 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
     if (next == MODEL_MACHINE_FREE) {
         r->t_end = t;
 #if MODEL_RATE_LAW
-        /* a damped law lets go while the point still penetrates: that depth is its set */
-        if (state == MODEL_MACHINE_RESTITUTION) r->delta_r = fmax(o.delta, 0.0);
+        /* a damped law lets go while the point still penetrates: that depth is its set, and
+         * where a new impact begins should the point come back before it leaves the surface */
+        if (state == MODEL_MACHINE_RESTITUTION) r->delta_r = c->delta_r = fmax(o.delta, 0.0);
 #endif
         act |= MODEL_ACT_IMPACT_END | MODEL_ACT_TOLERANCES;
         for (int i = 0; i < MODEL_NSTATE; ++i) r->scale[i] = 1.0;  /* no impact's scales */

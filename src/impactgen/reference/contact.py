@@ -136,16 +136,17 @@ class Contact:
         return -self.mu * F * v_x / math.sqrt(v_x ** 2 + self.eps ** 2)
 
     def at_maximum_compression(self, delta_m: float, P_m: float) -> None:
-        """Fix delta_m, delta_r (Eq. 12, clamped) and R_res (continuity at delta_m)."""
+        """Fix delta_m, delta_r (Eq. 12, clamped; Thornton's delta_p) and R_res (continuity
+        at delta_m)."""
         self.delta_m = delta_m
+        if not self.plastic:
+            self.delta_r, self.R_res = 0.0, self.R
+            return
         if self.law == "thornton":
             self.delta_r = self.thornton_set(delta_m, P_m)
-            self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
-        elif self.plastic:
-            self.delta_r = max(0.0, delta_m * (1 - math.sqrt(6.5 / (delta_m / self.delta_c + 5.5))))
-            self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
         else:
-            self.delta_r, self.R_res = 0.0, self.R
+            self.delta_r = max(0.0, delta_m * (1 - math.sqrt(6.5 / (delta_m / self.delta_c + 5.5))))
+        self.R_res = (3 * P_m / (4 * self.E_star)) ** 2 / (delta_m - self.delta_r) ** 3
 
     def thornton_set(self, delta_m: float, P_m: float) -> float:
         """Thornton's permanent set after a maximum (delta_m, P_m): unloading is Hertzian
