@@ -72,8 +72,8 @@ def test_the_tip_has_the_run_s_phase_and_the_joints_are_free(bouncing_paper):
     from impactgen.animate import frame_times, point_phases
     times = frame_times(bouncing_paper, 30)
     phases = point_phases(bouncing_paper, times)
-    assert phases.shape == (bouncing_paper.n, 30)
-    assert set(phases[0]) == {"free"}
+    assert phases.shape == (bouncing_paper.n + 1, 30)  # the pivot, the joint, the tip
+    assert set(phases[0]) == {"free"} and set(phases[1]) == {"free"}
     assert _in_impact(bouncing_paper, times).tolist() == [p in IMPACT_PHASES for p in phases[-1]]
 
 
@@ -144,7 +144,7 @@ def test_a_joint_on_the_surface_is_drawn_in_its_contact_phase(tmp_path):
     assert joint_impacts
     first = joint_impacts[0]
     middle = np.array([(first.t_start + first.t_end) / 2])
-    assert point_phases(result, middle)[0, 0] in ("elastic", "elastoplastic", "restitution", "reloading")
+    assert point_phases(result, middle)[1, 0] in ("elastic", "elastoplastic", "restitution", "reloading")  # joint 1
     frames = 12
     assert frame_times(result, frames).size == frames
     path = animate(result, tmp_path / "onto.gif", fps=frames, seconds=1.0, dpi=40)
@@ -152,3 +152,21 @@ def test_a_joint_on_the_surface_is_drawn_in_its_contact_phase(tmp_path):
         left = np.asarray(frame.crop((0, 0, frame.width // 2, frame.height))).astype(int)
         red = (left[..., 0] > 120) & (left[..., 0] > 2.5 * left[..., 1]) & (left[..., 0] > 2.5 * left[..., 2])
         assert not red.any()
+
+
+def test_a_free_rod_moves_with_its_base_point(tmp_path):
+    """rod-drop: the drawing follows the base point (the rod falls, its lower end strikes), and
+    the base point's row of phases has its impacts."""
+    import impactgen
+    from impactgen.animate import animate, base_at, frame_times, point_phases
+    result = impactgen.simulate(impactgen.load_scene("rod-drop"), dense_output=True, warn=False)
+    times = frame_times(result, 40)
+    base = base_at(result, times)
+    assert base[1, 0] == pytest.approx(0.05) and base[1].min() < 0.002  # from 5 cm down to the plate
+    assert point_phases(result, times).shape == (2, 40)
+    first = result.impacts[0]
+    assert first.point == "base"
+    middle = np.array([(first.t_start + first.t_end) / 2])
+    assert point_phases(result, middle)[0, 0] in ("elastic", "elastoplastic", "restitution", "reloading")
+    path = animate(result, tmp_path / "rod.gif", fps=FRAMES, seconds=1.0, dpi=40)
+    assert path.stat().st_size > 0

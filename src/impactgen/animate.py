@@ -28,7 +28,7 @@ import numpy as np
 from .errors import SceneError, excerpt
 from .plots import PHASE_COLOURS, _pyplot
 from .results import SimulationResult, point_number
-from .scene import TOUCH_TOLERANCE, joint_heights
+from .scene import TOUCH_TOLERANCE, initial_surface_height
 
 IMPACT_SHARE = 0.5  # of the frames, shared equally by the impacts when the run also has flight
 CONTACT_PHASES = ("elastic", "elastoplastic", "restitution", "reloading")  # the phases of an impact
@@ -91,20 +91,34 @@ def angles_at(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     return np.vstack([np.interp(times, result.t, result.q[i]) for i in range(n)])
 
 
-def point_positions(lengths: tuple[float, ...], q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """x and y of the pivot, every joint and the tip: shape (n + 1, len(frames)) each."""
+def base_at(result: SimulationResult, times: np.ndarray) -> np.ndarray:
+    """A free chain's base point (x_0, y_0) at `times`, shape (2, len(times)), as `angles_at`
+    reads the angles; zeros (the pivot) for a pinned chain."""
+    if not result.scene.free:
+        return np.zeros((2, len(times)))
+    n = result.n
+    if result.sol:
+        return np.asarray(result.sol(np.clip(times, result.sol.t_min, result.sol.t_max)))[n:n + 2]
+    return np.vstack([np.interp(times, result.t, result.base[i]) for i in range(2)])
+
+
+def point_positions(lengths: tuple[float, ...], q: np.ndarray, base: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """x and y of the pivot (or a free chain's base point, `base`: shape (2, frames)), every
+    joint and the tip: shape (n + 1, len(frames)) each."""
     L = np.asarray(lengths)[:, None]
-    zero = np.zeros((1, q.shape[1]))
-    return (np.vstack([zero, np.cumsum(L * np.cos(q), axis=0)]),
-            np.vstack([zero, np.cumsum(L * np.sin(q), axis=0)]))
+    x0, y0 = base if base is not None else np.zeros((2, q.shape[1]))
+    return (x0 + np.vstack([np.zeros_like(x0), np.cumsum(L * np.cos(q), axis=0)]),
+            y0 + np.vstack([np.zeros_like(y0), np.cumsum(L * np.sin(q), axis=0)]))
 
 
 def point_phases(result: SimulationResult, times: np.ndarray) -> np.ndarray:
-    """The phase of every contact point at `times`: shape (n, len(times)), joints 1 to n-1,
-    then the tip. The tip's row is read from the result's phase spans; a joint's from its
-    impacts (each begins elastic and goes through its switches to its end); a joint without
+    """The phase of every contact point at `times`: shape (n + 1, len(times)), the base (a
+    free chain's base point; a pinned chain's pivot, always "free"), joints 1 to n-1, then the
+    tip. The tip's row is read from the result's phase spans; another point's from its
+    impacts (each begins elastic and goes through its switches to its end); a point without
     impacts is "free" throughout."""
-    phases = np.full((result.n, len(times)), "free", dtype=object)
+    phases = np.full((result.n + 1, len(times)), "free", dtype=object)
     spans = result.phases
     if spans:
         starts = np.array([s.t0 for s in spans])
@@ -113,7 +127,7 @@ def point_phases(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     for impact in result.impacts:
         if impact.point == "tip":
             continue
-        row = phases[point_number(impact.point, result.n) - 1]
+        row = phases[point_number(impact.point, result.n)]
         end = math.inf if impact.t_end is None else impact.t_end
         changes = [(impact.t_start, "elastic")] + [(t, to) for t, _, to in impact.switches]
         for (t0, phase), (t1, _) in zip(changes, changes[1:] + [(end, "")]):
@@ -122,9 +136,8 @@ def point_phases(result: SimulationResult, times: np.ndarray) -> np.ndarray:
 
 
 def surface_height(result: SimulationResult) -> float:
-    """The surface's height: the scene's, or the tip's at the start for "initial"."""
-    scene = result.scene
-    return joint_heights(scene)[-1] if scene.surface_height is None else scene.surface_height
+    """The surface's height: the scene's, or its lowest contact point's at the start for "initial"."""
+    return initial_surface_height(result.scene)
 
 
 def default_path(scene_name: str) -> Path:
@@ -202,7 +215,7 @@ def animate(result: SimulationResult, path: str | Path, *, fps: int = DEFAULT_FP
     plt = _pyplot()
     writer = animation.PillowWriter(fps=fps) if path.suffix.lower() == ".gif" else animation.FFMpegWriter(fps=fps)
     times = frame_times(result, frames, impact_share)
-    x, y = point_positions(result.scene.chain.length, angles_at(result, times))
+    x, y = point_positions(result.scene.chain.length, angles_at(result, times), base_at(result, times))
     drawing = _Drawing(plt, result, times, x, y, impact_share, fps)
     try:
         with writer.saving(drawing.fig, str(path), dpi):
@@ -237,7 +250,8 @@ class _Drawing:
         self.y_s = surface_height(result)
         self.phases = point_phases(result, times)
         slack = TOUCH_TOLERANCE * max(1.0, sum(result.scene.chain.length))
-        below = y[1:] < self.y_s - slack  # (n, frames): a point under the surface
+        below = y < self.y_s - slack  # (n + 1, frames): a point under the surface
+        below[0] &= result.scene.free  # (a pinned chain's pivot is no contact point)
         self.warned = below & (self.phases == "free")  # ... with no contact law holding it
         self.warp = warped_time(result, impact_share)
         self.fig = plt.figure(figsize=(9, 5))
@@ -260,11 +274,16 @@ class _Drawing:
         ax.set_aspect("equal")
         ax.axhspan(y0, self.y_s, facecolor="#eeeeee", edgecolor="#999999", hatch="///", lw=0)
         ax.axhline(self.y_s, color="k", lw=1.2)
-        ax.plot([0.0], [0.0], marker="^", color="k", ms=9, zorder=4)
+        free = self.result.scene.free
+        if not free:  # the pivot; a free chain's base point is a contact point, drawn as the joints
+            ax.plot([0.0], [0.0], marker="^", color="k", ms=9, zorder=4)
         (self.links,) = ax.plot([], [], "-", color="#333333", lw=3, solid_capstyle="round", zorder=3)
-        self.points = ax.scatter(x[1:, 0], y[1:, 0], s=[40] * (self.result.n - 1) + [90],
+        self.first = 0 if free else 1  # the first of the drawn contact points
+        self.points = ax.scatter(x[self.first:, 0], y[self.first:, 0], s=[40] * (self.result.n - self.first) + [90],
                                  edgecolors="k", linewidths=1.0, zorder=5)
-        ax.set_xlabel("x (m)")
+        angle = self.result.scene.surface_angle_deg
+        along = f" (the surface's frame: inclined by {angle:g} degrees)" if angle else ""
+        ax.set_xlabel(f"x (m){along}", fontsize=9 if angle else None)
         ax.set_ylabel("y (m)")
         count = len(self.result.impacts)
         ax.set_title(f"{self.result.scene.name}: {count} impact{'' if count == 1 else 's'}, "
@@ -284,7 +303,8 @@ class _Drawing:
             handles.append(Line2D([], [], ls="", marker="o", mfc=BELOW_COLOUR, mec="k",
                                   label="below the surface, no contact law"))
         ax.legend(handles=handles, loc="lower left", fontsize=8, frameon=False,
-                  title="contact points (joints, tip)", title_fontsize=8)
+                  title="contact points (base, joints, tip)" if self.result.scene.free
+                  else "contact points (joints, tip)", title_fontsize=8)
 
     def _draw_tip_height(self, ax) -> None:
         """The tip's height above the surface in micrometres against the warped time: an
@@ -322,8 +342,8 @@ class _Drawing:
         x, y, t = self.x[:, k], self.y[:, k], float(self.times[k])
         self.links.set_data(x, y)
         colours = [BELOW_COLOUR if warned else MARKER_COLOURS.get(phase, "#ffffff")
-                   for phase, warned in zip(self.phases[:, k], self.warned[:, k])]
-        self.points.set_offsets(np.column_stack([x[1:], y[1:]]))
+                   for phase, warned in zip(self.phases[self.first:, k], self.warned[self.first:, k])]
+        self.points.set_offsets(np.column_stack([x[self.first:], y[self.first:]]))
         self.points.set_facecolors(colours)
         times, warped = self.warp
         w = float(np.interp(t, times, warped))

@@ -29,11 +29,11 @@ def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
     if not tips or tips[0].i_end is None:
         raise SceneError("initial", "the run has no finished impact to compare the rigid laws with"
                          + (f": {result.message}" if result.message else ""))
-    scene, n = result.scene, result.n
+    scene, n, dof = result.scene, result.n, result.scene.dof
     impact = tips[0]
     y = result.trajectory.y
-    q0, u0 = y[impact.i_start, :n], y[impact.i_start, n:2 * n]
-    u_compliant = y[impact.i_end, n:2 * n]
+    q0, u0 = y[impact.i_start, :n], y[impact.i_start, dof:2 * dof]  # a free chain's base point's velocity too
+    u_compliant = y[impact.i_end, dof:2 * dof]
     coefficients = impact.coefficients()
     chain = RigidChain.from_scene(scene)
     J = chain.tip_jacobian(q0)
@@ -47,7 +47,7 @@ def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
         try:
             out = solve_impact(chain, q0, u0, law, e, scene.contact.friction)
         except ImpactgenError as exc:
-            row = _row(law, name, e, np.full(n, math.nan), u_compliant, (math.nan, math.nan), math.nan, math.nan,
+            row = _row(law, name, e, np.full(dof, math.nan), u_compliant, (math.nan, math.nan), math.nan, math.nan,
                        math.nan, math.nan)
             row["note"] = str(exc)
             rows.append(row)

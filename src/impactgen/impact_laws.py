@@ -43,37 +43,52 @@ MAX_SWITCHES = 16  # slip-stick-reversal changes in one impact: W is constant, s
 
 @dataclass(frozen=True)
 class RigidChain:
-    """The chain's masses and lengths: what its mass matrix and tip Jacobian need."""
+    """The chain's masses and lengths: what its mass matrix and tip Jacobian need. A free
+    chain (`free`) has its base point's velocity (u_x0, u_y0) after the angular speeds in u."""
 
     length: tuple[float, ...]
     mass: tuple[float, ...]
+    free: bool = False
 
     @classmethod
     def from_scene(cls, scene) -> "RigidChain":
-        return cls(tuple(scene.chain.length), tuple(scene.chain.mass))
+        return cls(tuple(scene.chain.length), tuple(scene.chain.mass), scene.free)
 
     @property
     def n(self) -> int:
         return len(self.length)
 
+    @property
+    def dof(self) -> int:
+        """The generalized speeds: the links', and a free chain's base point's two."""
+        return self.n + (2 if self.free else 0)
+
+    def _base_columns(self) -> np.ndarray:
+        """The velocity Jacobian's columns of the base point's speeds: (2, 2) unit for a free
+        chain, none (2, 0) for a pinned one."""
+        return np.eye(2) if self.free else np.zeros((2, 0))
+
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """M = sum_j m_j Jc_j^T Jc_j + diag(m_j L_j^2 / 12), Jc_j the velocity Jacobian of
-        link j's mass centre: column i < j is L_i (-sin q_i, cos q_i), column j half of it."""
+        link j's mass centre: column i < j is L_i (-sin q_i, cos q_i), column j half of it
+        (and a free chain's base point's columns the unit vectors)."""
         L, m = np.asarray(self.length), np.asarray(self.mass)
         n = self.n
-        M = np.diag(m * L ** 2 / 12.0)
+        M = np.zeros((self.dof, self.dof))
+        M[:n, :n] = np.diag(m * L ** 2 / 12.0)
         e = np.vstack([-np.sin(q), np.cos(q)]) * L  # (2, n): column i is L_i e_i'
         for j in range(n):
             Jc = np.zeros((2, n))
             Jc[:, :j] = e[:, :j]
             Jc[:, j] = e[:, j] / 2.0
+            Jc = np.hstack([Jc, self._base_columns()])
             M += m[j] * Jc.T @ Jc
         return M
 
     def tip_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """(2, n): rows d v_t / du and d v_n / du of the tip (t along +x, n along +y)."""
+        """(2, dof): rows d v_t / du and d v_n / du of the tip (t along +x, n along +y)."""
         L = np.asarray(self.length)
-        return np.vstack([-L * np.sin(q), L * np.cos(q)])
+        return np.hstack([np.vstack([-L * np.sin(q), L * np.cos(q)]), self._base_columns()])
 
     def kinetic_energy(self, q: np.ndarray, u: np.ndarray) -> float:
         return 0.5 * float(u @ self.mass_matrix(q) @ u)
@@ -108,8 +123,9 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
     Parameters
     ----------
     chain : RigidChain
-    q, u : array_like, shape (n,)
-        Link angles (rad, from +x) and speeds (rad/s) at the instant of impact.
+    q, u : array_like, shape (n,) and (dof,)
+        Link angles (rad, from +x) and speeds (rad/s, and a free chain's base point's
+        velocity after them, m/s) at the instant of impact.
     law : {"newton", "poisson", "energetic"}
     e : float
         The law's coefficient of restitution, >= 0: at most 1 for a rigid impact, though a
