@@ -86,7 +86,7 @@ class ReferenceModel:
     def __post_init__(self) -> None:
         tip = ContactPoint(self.n, point_name(self.n, self.n), self.contact)
         self.points = [*([self.base] if self.base else []), *self.joints, tip]  # by index
-        self.dof = self.chain.dof  # the positions: the angles, after the base's coordinates if free
+        self.dof = self.chain.dof  # the positions: the angles, then a free chain's base coordinates
         self.nstate = 2 * self.dof + (4 if self.friction_state else 2)  # positions, speeds, works, impulses
 
     @property
