@@ -216,7 +216,7 @@ def speed_sweep(scene: Scene | str, laws: str | Sequence[str], speeds: Sequence[
 
 def plot_speed_sweep(frame, out: Path, title: str) -> Path:
     """e_N, delta_max and the contact time against the impact speed, every law in each panel."""
-    from .plots import _pyplot
+    from .plots import _pyplot, save_figure
     plt = _pyplot()
     fig, axes = plt.subplots(1, len(SPEED_PANELS), figsize=(5 * len(SPEED_PANELS), 4.2))
     for law, rows in frame.groupby("law", sort=False):
@@ -229,14 +229,7 @@ def plot_speed_sweep(frame, out: Path, title: str) -> Path:
         ax.grid(alpha=0.3)
     axes[0].legend()
     fig.suptitle(title)
-    fig.tight_layout()
-    try:
-        fig.savefig(out, dpi=120)
-    except OSError as exc:
-        raise SceneError("--out", f"cannot write the figure to {out}: {exc}") from None
-    finally:
-        plt.close(fig)
-    return out
+    return save_figure(fig, out)
 
 
 def speeds_json(frame) -> list[dict[str, Any]]:

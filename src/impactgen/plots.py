@@ -89,6 +89,20 @@ def plot_simulation(result: SimulationResult, out_dir: Path, impact: int | None 
     return _plot_window(plt, result, out_dir, _mask(result, window), impact)
 
 
+def save_figure(fig, out: Path) -> Path:
+    """Write `fig` to `out` (PNG, tight layout) and close it; a path that cannot be written is
+    a SceneError naming --out, not a traceback from matplotlib."""
+    plt = _pyplot()
+    fig.tight_layout()
+    try:
+        fig.savefig(out, dpi=120)
+    except OSError as exc:
+        raise SceneError("--out", f"cannot write the figure to {out}: {exc}") from None
+    finally:
+        plt.close(fig)
+    return out
+
+
 def _save(plt, fig, path: Path, paths: list[Path]) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -123,7 +123,7 @@ def _number(value: float) -> float | None:
 def plot_fit(result: FitResult, out: Path) -> Path:
     """Measured against fitted, one panel per measurement column, every law's points (the
     best law's with the data's error bars) beside the line of equality."""
-    from ..plots import _pyplot
+    from ..plots import _pyplot, save_figure
     plt = _pyplot()
     columns = list(result.measurements.measured)
     across = min(len(columns), PANELS_ACROSS)
@@ -149,11 +149,4 @@ def plot_fit(result: FitResult, out: Path) -> Path:
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=8)
     fig.suptitle(f"{result.scene_name}: measured against fitted ({result.measurements.source})")
-    fig.tight_layout()
-    try:
-        fig.savefig(out, dpi=120)
-    except OSError as exc:
-        raise SceneError("--out", f"cannot write the figure to {out}: {exc}") from None
-    finally:
-        plt.close(fig)
-    return out
+    return save_figure(fig, out)
