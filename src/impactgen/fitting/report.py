@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import SceneError
 from ..summaries import summary_unit
 from .solve import FitResult, LawFit
 
