@@ -170,3 +170,17 @@ def test_a_free_rod_moves_with_its_base_point(tmp_path):
     assert point_phases(result, middle)[0, 0] in ("elastic", "elastoplastic", "restitution", "reloading")
     path = animate(result, tmp_path / "rod.gif", fps=FRAMES, seconds=1.0, dpi=40)
     assert path.stat().st_size > 0
+
+
+def test_an_inclined_surface_is_drawn_at_its_angle_with_gravity_down():
+    """The surface's frame (x along the surface, y normal to it) is turned for the drawing:
+    gravity (g sin a, -g cos a) there points straight down, and the surface descends towards
+    +x at its angle."""
+    from impactgen.animate import upright
+    a = 20.0
+    g_x, g_y = upright(np.array([np.sin(np.radians(a))]), np.array([-np.cos(np.radians(a))]), a)
+    assert g_x[0] == pytest.approx(0.0, abs=1e-15) and g_y[0] == pytest.approx(-1.0)
+    x, y = upright(np.array([0.0, 1.0]), np.array([-0.1, -0.1]), a)
+    assert (y[1] - y[0]) / (x[1] - x[0]) == pytest.approx(-np.tan(np.radians(a)))
+    level = upright(np.array([0.3]), np.array([0.2]), 0.0)
+    assert level[0][0] == 0.3 and level[1][0] == 0.2

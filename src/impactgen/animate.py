@@ -135,6 +135,15 @@ def point_phases(result: SimulationResult, times: np.ndarray) -> np.ndarray:
     return phases
 
 
+def upright(x: np.ndarray, y: np.ndarray, angle_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Positions in the surface's frame (x along it, y normal to it) turned so that gravity
+    points down the page: the surface descends towards +x at `angle_deg`."""
+    if not angle_deg:
+        return x, y
+    a = np.radians(angle_deg)
+    return x * np.cos(a) + y * np.sin(a), -x * np.sin(a) + y * np.cos(a)
+
+
 def surface_height(result: SimulationResult) -> float:
     """The surface's height: the scene's, or its lowest contact point's at the start for "initial"."""
     return initial_surface_height(result.scene)
@@ -246,8 +255,10 @@ class _Drawing:
 
     def __init__(self, plt, result: SimulationResult, times: np.ndarray, x: np.ndarray, y: np.ndarray,
                  impact_share: float, fps: int):
-        self.result, self.times, self.x, self.y, self.fps = result, times, x, y, fps
+        self.result, self.times, self.fps = result, times, fps
         self.y_s = surface_height(result)
+        self.tip_height = y[-1] - self.y_s  # in the surface's frame, as the run computes it
+        self.x, self.y = upright(x, y, result.scene.surface_angle_deg)  # drawn with gravity down
         self.phases = point_phases(result, times)
         slack = TOUCH_TOLERANCE * max(1.0, sum(result.scene.chain.length))
         below = y < self.y_s - slack  # (n + 1, frames): a point under the surface
@@ -267,13 +278,20 @@ class _Drawing:
         reach = float(sum(self.result.scene.chain.length))
         margin = 0.08 * reach
         x0, x1 = min(x.min(), -0.1 * reach) - margin, max(x.max(), 0.1 * reach) + margin
-        y0 = min(y.min(), self.y_s) - 2.5 * margin
+        angle = self.result.scene.surface_angle_deg
+        # the surface's line y = y_s of its own frame, drawn across the view and below it
+        along = np.array([x0 - 2 * reach, x1 + 2 * reach])
+        line_x, line_y = upright(along, np.full(2, self.y_s), angle)
+        slope = -np.tan(np.radians(angle))
+        y_line = (lambda xs: line_y[0] + slope * (np.asarray(xs) - line_x[0]))
+        y0 = min(y.min(), float(y_line([x0, x1]).min())) - 2.5 * margin
         y1 = max(y.max(), 0.0) + margin
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
-        ax.axhspan(y0, self.y_s, facecolor="#eeeeee", edgecolor="#999999", hatch="///", lw=0)
-        ax.axhline(self.y_s, color="k", lw=1.2)
+        ax.fill_between([x0, x1], y0, y_line([x0, x1]), facecolor="#eeeeee", edgecolor="#999999",
+                        hatch="///", lw=0)
+        ax.plot([x0, x1], y_line([x0, x1]), color="k", lw=1.2)
         free = self.result.scene.free
         if not free:  # the pivot; a free chain's base point is a contact point, drawn as the joints
             ax.plot([0.0], [0.0], marker="^", color="k", ms=9, zorder=4)
@@ -281,10 +299,9 @@ class _Drawing:
         self.first = 0 if free else 1  # the first of the drawn contact points
         self.points = ax.scatter(x[self.first:, 0], y[self.first:, 0], s=[40] * (self.result.n - self.first) + [90],
                                  edgecolors="k", linewidths=1.0, zorder=5)
-        angle = self.result.scene.surface_angle_deg
-        along = f" (the surface's frame: inclined by {angle:g} degrees)" if angle else ""
-        ax.set_xlabel(f"x (m){along}", fontsize=9 if angle else None)
-        ax.set_ylabel("y (m)")
+        tilt = f" (the surface inclined by {angle:g} degrees, gravity down)" if angle else ""
+        ax.set_xlabel(f"horizontal (m){tilt}" if angle else "x (m)", fontsize=9 if angle else None)
+        ax.set_ylabel("vertical (m)" if angle else "y (m)")
         count = len(self.result.impacts)
         ax.set_title(f"{self.result.scene.name}: {count} impact{'' if count == 1 else 's'}, "
                      f"{self.result.status}", fontsize=10)
@@ -348,7 +365,7 @@ class _Drawing:
         times, warped = self.warp
         w = float(np.interp(t, times, warped))
         self.cursor.set_xdata([w, w])
-        self.dot.set_offsets([[w, (y[-1] - self.y_s) * 1e6]])
+        self.dot.set_offsets([[w, self.tip_height[k] * 1e6]])
         self.dot.set_facecolors([colours[-1]])
         rate = self._sim_per_video_second(k)
         digits = int(np.clip(np.ceil(-np.log10(max(rate / self.fps, 1e-15))) + 1, 3, 12))  # a frame's step shows
