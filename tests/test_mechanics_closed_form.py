@@ -23,8 +23,12 @@ def test_closed_form_equals_kanes_method(n):
 
 
 def test_the_generator_switches_to_the_closed_form_beyond_kanes_range():
-    assert chain_equations(KANE_MAX_LINKS) is derive_chain(KANE_MAX_LINKS)
-    assert chain_equations(KANE_MAX_LINKS + 1) is closed_form_chain(KANE_MAX_LINKS + 1)
+    # the same arguments as the generator passes them (lru_cache keys derive_chain(8) and
+    # derive_chain(8, False, False) apart)
+    pinned_level = (False, False)  # free, inclined
+    assert chain_equations(KANE_MAX_LINKS) is derive_chain(KANE_MAX_LINKS, *pinned_level)
+    assert chain_equations(KANE_MAX_LINKS + 1) is closed_form_chain(KANE_MAX_LINKS + 1, *pinned_level)
+    assert chain_equations(KANE_MAX_LINKS, True, True) is derive_chain(KANE_MAX_LINKS, True, True)
 
 
 @pytest.mark.slow
