@@ -24,6 +24,12 @@ PLASTIC_LAWS = ("three-phase", "thornton")  # yield, a permanent set, unloading 
 LAW_KEYS = {**{name: ("contact.restitution",) for name in HERTZ_DAMPED},
             "kelvin-voigt": ("contact.stiffness", "contact.damping"),
             "thornton": ("contact.limiting_pressure",)}
+EVERY_LAW_KEY = tuple(sorted({key for keys in LAW_KEYS.values() for key in keys}))  # the keys some law reads
+
+
+def foreign_law_keys(law: str) -> tuple[str, ...]:
+    """The other laws' keys that `law` does not read (a scene under it refuses them)."""
+    return tuple(key for key in EVERY_LAW_KEY if key not in LAW_KEYS.get(law, ()))
 
 # Machine states: contact phases, plus reloading (restitution's law, watching delta_m).
 STATES = ("free", "elastic", "elastoplastic", "restitution", "reloading", "sustained")

@@ -19,7 +19,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .codegen.spec import LAW_KEYS
+from .codegen.spec import EVERY_LAW_KEY, LAW_KEYS, foreign_law_keys
 from .errors import SceneError
 from .scene import CONTACT_MODELS, Scene
 
@@ -55,8 +55,7 @@ def check_laws(laws: str | Sequence[str], flag: str = "--laws") -> tuple[str, ..
 def law_keys(settings: Mapping[str, Any] | None) -> dict[str, Any]:
     """The keys among `settings` that belong to some law (contact.restitution, ...): what
     `under_law` gives each law that reads them."""
-    every = {key for keys in LAW_KEYS.values() for key in keys}
-    return {key: value for key, value in (settings or {}).items() if key in every}
+    return {key: value for key, value in (settings or {}).items() if key in EVERY_LAW_KEY}
 
 
 def under_law(scene: Scene, law: str, settings: Mapping[str, Any] | None = None) -> Scene:
@@ -70,8 +69,7 @@ def under_law(scene: Scene, law: str, settings: Mapping[str, Any] | None = None)
     """
     own = LAW_KEYS.get(law, ())
     change: dict[str, Any] = {"contact.model": law}
-    change.update({key: None for keys in LAW_KEYS.values() for key in keys
-                   if key not in own and scene[key] is not None})
+    change.update({key: None for key in foreign_law_keys(law) if scene[key] is not None})
     change.update({key: value for key, value in (settings or {}).items() if key in own})
     return scene.replace(change)
 

@@ -24,7 +24,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..codegen.spec import LAW_KEYS
+from ..codegen.spec import foreign_law_keys
 from ..errors import SceneError, SolverError, ValidityWarning, excerpt
 from ..scene import Scene
 from .data import FitParameter, Measurements
@@ -282,7 +282,7 @@ def covariance(J: np.ndarray, chi2: float, count: int, sigma_given: bool
 def law_parameters(parameters: list[FitParameter], law: str) -> list[FitParameter]:
     """The fitted parameters `law` takes: all but the other laws' own keys (a Hunt-Crossley
     fit takes contact.restitution, a three-phase fit of the same data leaves it out)."""
-    theirs = {key for name, keys in LAW_KEYS.items() if name != law for key in keys} - set(LAW_KEYS.get(law, ()))
+    theirs = foreign_law_keys(law)
     return [p for p in parameters if p.key not in theirs]
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from ..codegen.parameters import broken_rule
-from ..codegen.spec import LAW_KEYS
+from ..codegen.spec import EVERY_LAW_KEY, LAW_KEYS
 from ..codegen.thresholds import THRESHOLD
 from ..errors import SceneError
 from .model import Scene
@@ -29,7 +29,7 @@ def check_law_keys(scene: Scene) -> None:
     """The contact law's own keys: each one it reads is given, none that it does not read."""
     law = scene.contact.model
     reads = LAW_KEYS.get(law, ())
-    for key in sorted({k for keys in LAW_KEYS.values() for k in keys}):
+    for key in EVERY_LAW_KEY:
         given = getattr(scene.contact, key.split(".")[1]) is not None
         if given and key not in reads:
             uses = f"it reads {', '.join(reads)}" if reads else "it reads none of the other laws' keys"
