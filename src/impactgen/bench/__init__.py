@@ -13,6 +13,15 @@ PARTS = ("workprecision", "rhs", "scaling", "sweep", "points", "free", "laws", "
 DEFAULT_PARTS = tuple(p for p in PARTS if p != "batch")
 
 
+def seconds_per_run(run, repeats: int) -> float:
+    """The mean wall time of `repeats` calls of `run` (one timing: a run shorter than the clock's
+    step is timed in a loop)."""
+    started = time.perf_counter()
+    for _ in range(repeats):
+        run()
+    return (time.perf_counter() - started) / repeats
+
+
 def run_benchmarks(out: Path, quick: bool, parts: set[str]) -> Path:
     """Run the parts asked for ("workprecision", "rhs", "scaling", "sweep", "points", "free", "laws",
     "batch") and write the report ("batch" is not among the default parts: a million cases take

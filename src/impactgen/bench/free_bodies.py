@@ -4,7 +4,8 @@ timed in the C engine and in the reference engine on the same scene, summary onl
 from __future__ import annotations
 
 import statistics
-import time
+
+from . import seconds_per_run
 
 TARGET_RATIO = 200.0  # the C engine against the reference engine, per impact
 ROUNDS = {"quick": 3, "full": 7}  # alternating rounds: C then the reference engine, each timed
@@ -17,13 +18,6 @@ def first_impact():
     return impactgen.load_scene("rod-drop", {"solver.t_end": "separation"})
 
 
-def _seconds(run, repeats: int) -> float:
-    started = time.perf_counter()
-    for _ in range(repeats):
-        run()
-    return (time.perf_counter() - started) / repeats
-
-
 def benchmark(quick: bool) -> dict:
     """Median over alternating rounds of the time of the first impact in each engine, after one
     run of each outside the timing (the model built, the modules imported)."""
@@ -33,8 +27,8 @@ def benchmark(quick: bool) -> dict:
     ref = impactgen.simulate(scene, engine="reference", warn=False)
     c_s, ref_s = [], []
     for _ in range(ROUNDS["quick" if quick else "full"]):
-        c_s.append(_seconds(lambda: impactgen.simulate(scene, record_steps=False, warn=False), C_REPEATS))
-        ref_s.append(_seconds(lambda: impactgen.simulate(scene, engine="reference", warn=False), 1))
+        c_s.append(seconds_per_run(lambda: impactgen.simulate(scene, record_steps=False, warn=False), C_REPEATS))
+        ref_s.append(seconds_per_run(lambda: impactgen.simulate(scene, engine="reference", warn=False), 1))
     return {"scene": "rod-drop", "status": c.status, "reference_status": ref.status,
             "point": c.impacts[0].point if c.impacts else None,
             # the impact's own record: the summary's fields are the tip's impacts, and the base strikes first

@@ -10,8 +10,9 @@
 from __future__ import annotations
 
 import statistics
-import time
 from pathlib import Path
+
+from . import seconds_per_run
 
 # Each law's own keys, near the paper's impact (e_N = 0.64): the damped Hertz laws at that
 # design coefficient; Kelvin-Voigt an underdamped impact of about a millisecond; Thornton a
@@ -36,13 +37,6 @@ def law_scene(law: str):
     return impactgen.load_scene("paper", {"contact.model": law, **LAW_SETTINGS[law]})
 
 
-def _per_run(run, repeats: int) -> float:
-    started = time.perf_counter()
-    for _ in range(repeats):
-        run()
-    return (time.perf_counter() - started) / repeats
-
-
 def laws_in_turn(rounds: int) -> dict:
     """Each law's time per impact: the median over rounds, each round every law in turn."""
     import impactgen
@@ -52,7 +46,7 @@ def laws_in_turn(rounds: int) -> dict:
     seconds: dict[str, list[float]] = {law: [] for law in scenes}
     for _ in range(rounds):
         for law, s in scenes.items():
-            seconds[law].append(_per_run(lambda: impactgen.simulate(s, record_steps=False, warn=False), REPEATS))
+            seconds[law].append(seconds_per_run(lambda: impactgen.simulate(s, record_steps=False, warn=False), REPEATS))
     return {law: {"ms_per_impact": statistics.median(t) * 1e3, "rounds_ms": [x * 1e3 for x in t],
                   "status": first[law].status, "e_N": first[law].summary["coefficients"]["e_N"],
                   "t_contact": first[law].summary["t_contact"]} for law, t in seconds.items()}
