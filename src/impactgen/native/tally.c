@@ -184,6 +184,20 @@ static void summarize_between(const ig_point *from, const ig_point *to, ig_summa
     out->residual = (to->T - from->T) - (out->W_normal + out->W_friction + out->W_gravity);
 }
 
+/* What both summaries share: the first impact's start, switches and coefficients of
+ * restitution, and the run's counts of impacts. */
+static void summarize_first(const ig_tally *a, ig_summary *out)
+{
+    out->t_impact = a->impacts ? a->first_begin.t : NAN;
+    out->n_switches = a->first_switches;
+    out->n_stick_slip = a->first_stick_slip;
+    out->impacts = a->impacts;
+    out->joint_impacts = a->joint_impacts;
+    out->first_point = a->first_point;
+    out->t_sustained = a->t_sustained;
+    summarize_coefficients(a, out);
+}
+
 void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
 {
     const int open = a->impacts > a->ended;  /* the latest impact is still in contact */
@@ -196,14 +210,7 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     run->delta_r = all.deepest_delta_r;
     run->R_res = all.deepest_R_res;
     run->t_contact = all.t_contact;
-    run->t_impact = a->impacts ? a->first_begin.t : NAN;
-    run->n_switches = a->first_switches;
-    run->n_stick_slip = a->first_stick_slip;
-    run->impacts = a->impacts;
-    run->joint_impacts = a->joint_impacts;
-    run->first_point = a->first_point;
-    run->t_sustained = a->t_sustained;
-    summarize_coefficients(a, run);  /* the first impact's, as the run's switches are */
+    summarize_first(a, run);  /* the first impact's switches and coefficients, the run's counts */
     if (a->impacts == 0) {
         *first = *run;
         return;
@@ -216,12 +223,5 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
     first->delta_r = first_open ? a->now_delta_r : a->first_delta_r;
     first->R_res = first_open ? a->now_R_res : a->first_R_res;
     first->t_contact = first_open ? 0.0 : a->first_end.t - a->first_begin.t;
-    first->t_impact = a->first_begin.t;
-    first->n_switches = a->first_switches;
-    first->n_stick_slip = a->first_stick_slip;
-    first->impacts = a->impacts;
-    first->joint_impacts = a->joint_impacts;
-    first->first_point = a->first_point;
-    first->t_sustained = a->t_sustained;
-    summarize_coefficients(a, first);
+    summarize_first(a, first);
 }
