@@ -181,8 +181,9 @@ SUMMARY_DOCS = {  # what each field is (summaries.py, MODEL section 6); units: s
     "t_contact": "contact time of the ended impacts", "t_impact": "start of the first impact (NaN: none)",
     "n_switches": "phase switches within the first impact",
     "n_stick_slip": "stick-slip changes within the first impact",
-    "impacts": "impacts of the tip", "joint_impacts": "impacts at the joints",
-    "first_point": "point of the first impact: n the tip, k joint k, 0 none",
+    "impacts": "impacts of the tip", "joint_impacts": "impacts at the joints and a free chain's base",
+    "first_point": "point of the first impact: n the tip, k joint k, 0 a free chain's base; none: 0 "
+                   "(pinned) or -1 (free)",
     "t_sustained": "start of sustained contact (NaN: none)", "t_final": "time at its end",
     "W_normal": "work of the normal forces", "W_friction": "work of the friction forces",
     "W_gravity": "work of gravity", "residual": "energy balance residual, delta T - sum of works",
