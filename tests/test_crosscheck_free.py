@@ -57,3 +57,27 @@ def test_engines_agree_on_the_free_rods_base_point():
     position, velocity = c.base[:, -1] - ref.base[:, -1], ref.base[2:]
     assert np.abs(position[:2]).max() <= FAST_TOL * sum(scene.chain.length)
     assert np.abs(position[2:]).max() <= FAST_TOL * np.abs(velocity).max()
+
+
+def test_engines_agree_on_random_free_chains():
+    """Random free chains (1 to 3 links, level or inclined, the friction modes), as
+    `impactgen crosscheck --random` draws them, to their first separation."""
+    rng = np.random.default_rng(7)
+    for i in range(2):
+        scene = crosscheck.random_free_scene(rng, i + 1, f"random-free-{i}", FAST_RTOL)
+        report = crosscheck.run_case(scene)
+        for quantity, value in report.differences.items():
+            assert value <= FAST_TOL, f"{quantity} differs by {value:.2e} on {scene.name}"
+
+
+def test_a_chain_that_never_moves_is_compared_on_the_chains_own_scales():
+    """A pendulum hanging still above the surface ends with speeds and energies of rounding
+    size in both engines: its final speeds and delta_T are compared against the chain's own
+    scales (a thousandth of sqrt(g L), and the energy at that speed), not against each other."""
+    scene = crosscheck.with_tolerance(impactgen.load_scene("paper", {
+        "chain.links": 1, "chain.length": 1.0, "chain.mass": 1.0, "initial.q_deg": [-90.0], "initial.u": [0.0],
+        "surface.height": -2.0, "solver.t_end": 0.1, "solver.sustained_contact": False}), FAST_RTOL)
+    c, ref = (impactgen.simulate(scene, engine=engine, warn=False) for engine in ("c", "reference"))
+    assert np.abs(ref.u).max() < 1e-15  # it never moves
+    differences = crosscheck.compare(c, ref)
+    assert differences["u_final"] <= FAST_TOL and differences["delta_T"] <= FAST_TOL, differences

@@ -312,8 +312,7 @@ def _crosscheck(args: argparse.Namespace) -> int:
         raise SceneError("crosscheck", "--rtol must lie in (0, 1), --tol be > 0, --random >= 0")
     rng = np.random.default_rng(args.seed)
     scenes = cc.standard_scenes(_link_range(args.links), args.rtol) + cc.points_scenes(args.rtol)
-    scenes += [cc.random_scene(rng, int(rng.integers(1, 7)), f"random-{args.seed}-{i}", args.rtol)
-               for i in range(args.random)]
+    scenes += cc.random_scenes(rng, args.random, str(args.seed), args.rtol)
     reports = cc.run(scenes, args.method, progress=cc.stderr_progress)
     worst = cc.worst(reports)
     passed = all(v <= args.tol for v, _ in worst.values())

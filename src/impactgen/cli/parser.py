@@ -89,7 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cc = sub.add_parser("crosscheck", help="compare the C engine with the reference engine")
     cc.add_argument("--links", default="1-6", help="steel chains to run, e.g. 1-6 or 2,4")
-    cc.add_argument("--random", type=int, default=0, metavar="N", help="N random scenes")
+    cc.add_argument("--random", type=int, default=0, metavar="N", help="N random scenes (a third of them free chains)")
     cc.add_argument("--seed", type=int, default=0, help="seed of the random scenes")
     cc.add_argument("--rtol", type=float, default=1e-11, help="solver rtol of both engines")
     cc.add_argument("--tol", type=float, default=1e-7, help="largest relative difference allowed")
