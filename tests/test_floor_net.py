@@ -54,6 +54,20 @@ def test_a_joint_under_the_floor_fails_the_run_naming_it(engine, record_steps):
     _assert_joint_2_under_the_floor(result.message)
 
 
+@pytest.mark.parametrize("engine, record_steps", [("c", True), ("c", False), ("reference", True)])
+def test_a_free_rods_base_under_the_floor_fails_the_run_naming_it(engine, record_steps):
+    """rod-drop onto a surface of 10 kPa: the base point lands (t = 0.101 s) and sinks beyond
+    1 % of the rod's length; the message names the base and the phase it was in."""
+    overrides = {"surface.E": 1e4, "surface.yield_strength": 100.0, "solver.t_end": 0.3,
+                 **({"solver.sustained_contact": False} if engine == "reference" else {})}
+    result = impactgen.simulate(impactgen.load_scene("rod-drop", overrides), engine=engine, warn=False,
+                                **({} if record_steps else {"record_steps": False}))
+    assert result.status == "failed" and not result.success
+    assert "base" in result.message and "below the surface" in result.message, result.message
+    assert "in phase 'base: elastoplastic'" in result.message, result.message
+    assert 0.101 < _time_named(result.message) < 0.12, result.message
+
+
 def test_the_cli_exits_4_naming_the_joint():
     args = [a for s in SOFT_SET for a in ("--set", s)]
     res = subprocess.run([sys.executable, "-m", "impactgen.cli", "run", "paper", *args], capture_output=True,

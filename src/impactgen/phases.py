@@ -195,11 +195,11 @@ def _status(lib, solver: Solver, machine: Machine, ran: MachineRun, impacts: lis
     if ran.flag == lib.IG_RUN_DONE:
         return "ok", ""
     if ran.flag == lib.IG_REACHED_END:
-        return _end_without_event(solver, impacts, STATES[machine.state.point[machine.tip_index].state])
+        return _end_without_event(solver, impacts, machine.phase_now())
     message = ran.message
     if ran.flag == lib.IG_ERR_SEGMENTS:
         message = f"more than {MAX_SEGMENTS} phase switches (chattering impacts?); shorten solver.t_end"
-    return "failed", str(SolverError(message, STATES[machine.state.point[machine.tip_index].state], ran.t_last))
+    return "failed", str(SolverError(message, machine.phase_now(), ran.t_last))
 
 
 def _step_pieces(session: EngineSession, model: CompiledModel, ran: MachineRun, segments: Segments, params,
@@ -231,8 +231,8 @@ def _end_without_event(solver: Solver, impacts: list[Impact], phase: str) -> tup
         return "ok", ""
     if not impacts:
         return "no-impact", f"no contact within solver.t_max = {solver.t_max:g} s"
-    return "ok", (f"no separation within solver.t_max = {solver.t_max:g} s: the tip came to rest "
-                  f"on the surface (phase {phase!r}); the summary's impact has no end")
+    return "ok", (f"no separation within solver.t_max = {solver.t_max:g} s: the chain came to "
+                  f"rest on the surface (phase {phase!r}); the summary's impact has no end")
 
 
 def _no_impact_at_start(scene: Scene, solver: Solver, model: CompiledModel, y: np.ndarray, first: list[float],

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .build import CompiledModel
-from .codegen.spec import point_name
+from .codegen.spec import STATES, point_name
 from .errors import SolverError
 from .records import SwitchRecord, TallyRecords, record_layout, summary_layout, switch_record_layout
 from .scene import EXPLICIT_METHODS, Scene, Solver
@@ -49,6 +49,16 @@ class Machine:
     def slip_label(self, state: int, slip: float) -> str:
         """The stick-slip label of a contact state under exact Coulomb friction, else ""."""
         return self.slip_labels[slip] if state != self.free else ""
+
+    def phase_now(self) -> str:
+        """The phase the machine is in, as the phase spans list it: the tip's bare phase while
+        no other point is in contact, else the points in contact, named ("base: elastoplastic")."""
+        point, free = self.state.point, self.free
+        touching = [(self.names[number], STATES[point[k].state]) for k, number in enumerate(self.points)
+                    if point[k].state != free]
+        if all(name == self.names[self.tip] for name, _ in touching):
+            return STATES[point[self.tip_index].state]
+        return ", ".join(f"{name}: {state}" for name, state in touching)
 
     def in_contact(self) -> list[str]:
         """The points in contact now, in point order, by name."""
