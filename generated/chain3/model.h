@@ -155,8 +155,8 @@ double model_delta_acceleration(int k, const double *y, const double *ydot, cons
 #define MODEL_FROZEN 0  /* friction keeps its direction from contact start */
 #define MODEL_SUSTAINED 0  /* the sustained-contact phase */
 #define MODEL_CONSTRAINED 0  /* some phase holds a point's velocity */
-#define MODEL_API_VERSION 4
-#define MODEL_STRUCTURE_HASH "bf65edb302b0dcfc"
+#define MODEL_API_VERSION 5
+#define MODEL_STRUCTURE_HASH "6c9111df2122b913"
 
 /* Thresholds of the machine (codegen/thresholds.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */
