@@ -25,8 +25,9 @@ from .thresholds import THRESHOLD, THRESHOLDS  # noqa: F401 (the machine prints 
 # The C API of model.h and model_machine.h: bumped when a signature or a struct changes (2: m.tip;
 # 3: every contact point's record in params.point[k] and machine.point[k], the tip's at
 # MODEL_TIP_POINT; 4: the machine is the runtime's model_machine.c, the parameter table and the
-# switch laws the model's model_params.c)
-API_VERSION = 4
+# switch laws the model's model_params.c; 5: model_point_integrals replaces model_tip_works, the
+# runtime's summaries are every point's, point_impacts replacing joint_impacts)
+API_VERSION = 5
 
 
 @dataclass(frozen=True)

@@ -57,13 +57,15 @@ def test_a_tallied_summary_gives_each_field_to_its_key():
     """from_tally unpacks Tallied in its field order: each field lands under its own name."""
     from impactgen.results import Tallied
     from impactgen.summaries import from_tally
-    values = [float(k + 1) for k in range(len(Tallied._fields) - 1)]  # all but y_final, each its own
-    tallied = Tallied(*values, y_final=(0.1, 0.2, 0.3, 0.4))
+    values = {name: float(k + 1) for k, name in enumerate(Tallied._fields[:-1])}  # all but y_final, each its own
+    values["point_impacts"] = (0, 101, 102)  # by point number: the pivot (no contact point), joint 1, the tip
+    tallied = Tallied(**values, y_final=(0.1, 0.2, 0.3, 0.4))
     summary = from_tally(tallied, 2, [])
     flat = {**summary, **summary["energy"]}
     for name in Tallied._fields:
-        if name in flat:
+        if name in flat and name != "point_impacts":
             assert flat[name] == getattr(tallied, name), name
+    assert summary["point_impacts"] == {"joint 1": 101, "tip": 102}  # by point name
     assert summary["q_final"] == [0.1, 0.2] and summary["u_final"] == [0.3, 0.4]
 
 

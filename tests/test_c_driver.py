@@ -58,6 +58,11 @@ def test_c_driver_runs_a_free_rod(tmp_path, c_driver):
     points = [printed[f"impact[{i}].point"] for i in range(1, len(result.impacts) + 1)]
     assert points == [impact.point for impact in result.impacts] and {"base", "tip"} <= set(points)
     final = result.summary
+    # its summary's counts are every point's: per point by number (0 the base, 1 the tip), and the first's point
+    assert int(printed["impacts"]) == final["impacts"] == len(result.impacts)
+    assert {"base": int(printed["point_impacts[0]"]), "tip": int(printed["point_impacts[1]"])} == final["point_impacts"]
+    assert int(printed["first_point"]) == final["first_point"] == 0
+    assert float(printed["delta_max"]) == pytest.approx(final["delta_max"], rel=1e-8)
     assert float(printed["u_final[1]"]) == pytest.approx(final["u_final"][0], rel=1e-8)
     for i, value in enumerate(result.base[:2, -1], start=1):
         assert float(printed[f"base_final[{i}]"]) == pytest.approx(value, rel=1e-8)

@@ -51,7 +51,10 @@ def test_the_issues_three_link_chain_lands_on_joint_2_and_stays_above_the_floor(
     assert np.max(outputs["delta_J2"]) == pytest.approx(max(i.delta_max for i in joint), rel=1e-6)
     assert np.max(outputs["delta"]) < CONTACT_DEPTH
     assert _budget_closes(result)
-    assert result.summary["impacts"] == sum(i.point == "tip" for i in result.impacts)  # the summary is the tip's
+    # the summary is every point's: all impacts counted, and per point
+    assert result.summary["impacts"] == len(result.impacts)
+    assert result.summary["point_impacts"] == {"joint 1": 0, "joint 2": len(joint), "tip": len(result.impacts) - len(joint)}
+    assert result.summary["delta_max"] == max(i.delta_max for i in result.impacts)
 
 
 def test_a_joint_that_lands_first_comes_to_rest_on_the_surface():
@@ -114,7 +117,10 @@ def test_each_point_has_its_own_works_and_they_add_up_to_the_budgets():
     energy = result.summary["energy"]
     for kind in ("W_normal", "W_friction"):
         assert sum(w[kind] for w in works.values()) == pytest.approx(energy[kind], rel=1e-12)
-    assert result.summary["joint_impacts"] > 0 and result.summary["first_point"] in range(1, 7)
+    counts = result.summary["point_impacts"]
+    assert sum(counts.values()) == result.summary["impacts"] == len(result.impacts)
+    assert sum(count for point, count in counts.items() if point != "tip") > 0
+    assert result.summary["first_point"] in range(1, 7)
     assert _budget_closes(result)
 
 

@@ -10,6 +10,7 @@ import pytest
 
 import impactgen
 from impactgen.fmu import build_fmu
+from impactgen.codegen.spec import point_name
 from impactgen.fmu.variables import summary_fields
 
 fmpy = pytest.importorskip("fmpy")
@@ -27,24 +28,26 @@ def fmus(tmp_path_factory) -> dict[str, Path]:
     return {name: build_fmu(impactgen.load_scene(name), folder / f"{name}.fmu") for name in SCENES}
 
 
-def summary_value(summary: dict, name: str) -> float:
+def summary_value(summary: dict, name: str, n: int) -> float:
     """A summary's field by its flat name (`energy.W_normal`, `u_final[2]`, `n_switches`), as the
-    sweep's columns name them."""
+    sweep's columns name them; `point_impacts[k]` by the point's number k, as the FMU names it."""
     if name in ("n_switches", "n_stick_slip"):
         return len(summary["switches" if name == "n_switches" else "stick_slip"])
     if "[" in name:
         key, index = name[:-1].split("[")
+        if key == "point_impacts":
+            return summary[key][point_name(int(index), n)]
         return summary[key][int(index) - 1]
     group, _, key = name.partition(".")
     value = summary[group][key] if key else summary[name]
     return math.nan if value is None else value
 
 
-def assert_summary(fmu_last, kind: str, summary: dict, n: int) -> None:
+def assert_summary(fmu_last, kind: str, summary: dict, n: int, dof: int | None = None) -> None:
     """Every field of one summary (kind: first_impact or run) at the FMU's last output point."""
     scale = max(summary["T0"], summary["Tf"])  # the energies'
-    for name, *_ in summary_fields(n):
-        got, want = float(fmu_last[f"{kind}.{name}"]), summary_value(summary, name)
+    for name, *_ in summary_fields(n, dof):
+        got, want = float(fmu_last[f"{kind}.{name}"]), summary_value(summary, name, n)
         if math.isnan(want):
             assert math.isnan(got), name
         else:  # the energy residual is a difference of energies: held to the energies' scale
@@ -66,6 +69,20 @@ def test_the_fmus_defaults_give_impactgen_runs_first_impact(fmus, name, kind):
     stop = result["time"][-1]
     timed = impactgen.simulate(scene, t_end=float(stop)).summary
     assert_summary(last, "run", timed, scene.n)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_free_rods_first_impact_is_its_base_s_as_the_c_engine_has_it(tmp_path, kind):
+    """rod-drop to separation: its first impact is the base point's (point 0), in the FMU's
+    first_impact.* as in impactgen run's summary, field for field."""
+    scene = impactgen.load_scene("rod-drop", {"solver.t_end": None})
+    path = str(build_fmu(scene, tmp_path / f"rod-{kind}.fmu"))
+    outputs = [v.name for v in read_model_description(path).modelVariables if v.name.startswith("first_impact.")]
+    last = simulate_fmu(path, fmi_type=kind, output=outputs)[-1]
+    summary = impactgen.simulate(scene).summary
+    assert summary["first_point"] == 0 and summary["delta_max"] > 0
+    assert last["first_impact.first_point"] == 0 and last["first_impact.point_impacts[0]"] == 1
+    assert_summary(last, "first_impact", summary, scene.n, scene.dof)
 
 
 @pytest.mark.parametrize("name", SCENES)

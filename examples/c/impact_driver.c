@@ -188,7 +188,14 @@ int main(int argc, char **argv)
     const ig_summary *sum = &r.summary;
     printf("scene %s\n", MODEL_SCENE_NAME);
     printf("status %s\n", r.status);
-    printf("impacts %d\n", sum->impacts);
+    printf("impacts %d\n", sum->impacts);  /* at every point; then per point, by its number */
+#ifdef MODEL_FREE
+    const int first_counted = 0;  /* the base point */
+#else
+    const int first_counted = 1;  /* (a pinned chain's pivot is no contact point) */
+#endif
+    for (int k = first_counted; k <= MODEL_NQ; ++k) printf("point_impacts[%d] %d\n", k, sum->point_impacts[k]);
+    printf("first_point %d\n", sum->first_point);
     printf("t_final %.17g\n", sum->t_final);
     printf("T0 %.17g\n", sum->T0);
     printf("Tf %.17g\n", sum->Tf);

@@ -138,9 +138,12 @@ int model_jacobian(double t, const double *y, double *J, const model_params *p);
  * the links (1 to 2) then the tip. h[k] = their heights above the surface y_s. */
 #define MODEL_NPOINT 3
 void model_heights(const double *y, double *h, const model_params *p);
-/* The tip's own works in y, J (the impact coefficients' terms): the works of every point's
- * forces, W_normal[, W_friction], less each joint's own (0 without friction). */
-void model_tip_works(const double *y, double *W_normal, double *W_friction);
+/* Contact point k's own integrals in y (the impact coefficients' terms), as own[0..3]: its
+ * works W_normal, W_friction (J) and impulses P_normal, P_friction (N s), 0 without friction.
+ * A joint's (or a free chain's base's) are its own states W_normal_Jj, ...; the tip's works
+ * are every point's, W_normal[, W_friction], less each joint's own, its impulses its own. */
+#define MODEL_NINTEGRAL 4
+void model_point_integrals(int k, const double *y, double *own);
 /* d2(delta)/dt2 of contact point k at y, given ydot = dy/dt (from model_rhs): its
  * acceleration into the surface (the start rule of a point resting on it). */
 double model_delta_acceleration(int k, const double *y, const double *ydot, const model_params *p);
@@ -152,8 +155,8 @@ double model_delta_acceleration(int k, const double *y, const double *ydot, cons
 #define MODEL_FROZEN 0  /* friction keeps its direction from contact start */
 #define MODEL_SUSTAINED 0  /* the sustained-contact phase */
 #define MODEL_CONSTRAINED 0  /* some phase holds a point's velocity */
-#define MODEL_API_VERSION 4
-#define MODEL_STRUCTURE_HASH "bf65edb302b0dcfc"
+#define MODEL_API_VERSION 5
+#define MODEL_STRUCTURE_HASH "6c9111df2122b913"
 
 /* Thresholds of the machine (codegen/thresholds.py). */
 #define MODEL_TOUCH_TOLERANCE 1e-12  /* a tip this far below the surface, relative to the chain's length (at least 1 m), still touches it at the start: the rounding of a height summed over the links */

@@ -454,10 +454,13 @@ void model_heights(const double *y, double *h, const model_params *p)
 
 }
 
-void model_tip_works(const double *y, double *W_normal, double *W_friction)
+void model_point_integrals(int k, const double *y, double *own)
 {
-    *W_normal = y[MODEL_Y_W_normal];
-    *W_friction = y[MODEL_Y_W_friction];
+    (void)k;  /* the tip: the works of every point less each joint's own; its impulses are its own */
+    own[0] = y[MODEL_Y_W_normal];
+    own[1] = y[MODEL_Y_W_friction];
+    own[2] = y[MODEL_Y_P_normal];
+    own[3] = y[MODEL_Y_P_friction];
 }
 
 /* d2(delta)/dt2 of point k at y, given ydot = dy/dt: -(Jy du/dt + (dJy/dt) u). */

@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import ImpactgenError, SceneError, SolverError
 from .impact_laws import LAWS, RigidChain, solve_impact
-from .results import SimulationResult, tip_impacts
+from .results import SimulationResult, first_of, point_number
 from .scene import Scene
 
 LAW_COEFFICIENT = {"newton": "e_N", "poisson": "e_P", "energetic": "e_E"}  # the coefficient each law takes
@@ -24,19 +24,20 @@ GAIN_TOLERANCE = 1e-12  # an energy change above this fraction of T_before count
 
 
 def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
-    """The rows of the comparison for the first impact of a compliant run (see `compare_laws`)."""
-    tips = tip_impacts(result.impacts)
-    if not tips or tips[0].i_end is None:
+    """The rows of the comparison for the first impact of a compliant run, at whichever point
+    (see `compare_laws`)."""
+    impact = first_of(result.impacts, result.n)
+    if impact is None or impact.i_end is None:
         raise SceneError("initial", "the run has no finished impact to compare the rigid laws with"
                          + (f": {result.message}" if result.message else ""))
     scene, n, dof = result.scene, result.n, result.scene.dof
-    impact = tips[0]
+    point = point_number(impact.point, n)
     y = result.trajectory.y
     q0, u0 = y[impact.i_start, :n], y[impact.i_start, dof:2 * dof]  # a free chain's base point's velocity too
     u_compliant = y[impact.i_end, dof:2 * dof]
     coefficients = impact.coefficients()
     chain = RigidChain.from_scene(scene)
-    J = chain.tip_jacobian(q0)
+    J = chain.point_jacobian(q0, point)
     v_after = J @ u_compliant
     rows = [_row("compliant", "", math.nan, u_compliant, u_compliant, (v_after[0], v_after[1]),
                  coefficients["P_c"] + coefficients["P_r"], coefficients["P_t"], impact.T_before, impact.T_after)]
@@ -45,7 +46,7 @@ def compare_rows(result: SimulationResult) -> list[dict[str, Any]]:
         name = LAW_COEFFICIENT[law]
         e = coefficients[name]
         try:
-            out = solve_impact(chain, q0, u0, law, e, scene.contact.friction)
+            out = solve_impact(chain, q0, u0, law, e, scene.contact.friction, point)
         except ImpactgenError as exc:
             row = _row(law, name, e, np.full(dof, math.nan), u_compliant, (math.nan, math.nan), math.nan, math.nan,
                        math.nan, math.nan)
@@ -85,8 +86,8 @@ def compare_laws(scene: Scene, **options: Any):
     pandas.DataFrame
         One row for the compliant run, then one per law ("newton", "poisson", "energetic"):
         the coefficient it was given (`coefficient`, `e`), the speeds after (`u_after[i]`,
-        rad/s), the largest difference from the compliant run's (`du_max`), the tip's speeds
-        after (`v_t_after`, `v_n_after`), the impulses (`P_n`, `P_t`, N s), the kinetic
+        rad/s), the largest difference from the compliant run's (`du_max`), the struck point's
+        speeds after (`v_t_after`, `v_n_after`), the impulses (`P_n`, `P_t`, N s), the kinetic
         energy before and after and its change (`energy_change`, J), `gains_energy`, and a
         `note` where a law has no solution. The compliant row also has e_N, e_P and e_E.
 

@@ -87,7 +87,12 @@ class RigidChain:
 
     def tip_jacobian(self, q: np.ndarray) -> np.ndarray:
         """(2, dof): rows d v_t / du and d v_n / du of the tip (t along +x, n along +y)."""
-        L = np.asarray(self.length)
+        return self.point_jacobian(q, self.n)
+
+    def point_jacobian(self, q: np.ndarray, point: int) -> np.ndarray:
+        """(2, dof): the same rows for contact point `point` (its number: 0 a free chain's base,
+        k the end of link k, n the tip): the links before it move it."""
+        L = np.where(np.arange(self.n) < point, np.asarray(self.length), 0.0)
         return np.hstack([np.vstack([-L * np.sin(q), L * np.cos(q)]), self._base_columns()])
 
     def kinetic_energy(self, q: np.ndarray, u: np.ndarray) -> float:
@@ -117,8 +122,9 @@ class LawOutcome:
         return self.T_after - self.T_before
 
 
-def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawOutcome:
-    """The speeds after a rigid impact of the chain's tip on the surface at (q, u).
+def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float, point: int | None = None) -> LawOutcome:
+    """The speeds after a rigid impact of one of the chain's points (the tip unless said) on the
+    surface at (q, u).
 
     Parameters
     ----------
@@ -133,6 +139,9 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
         act during the contact (`impactgen compare` passes them on as they are).
     mu : float
         Coulomb's friction coefficient, >= 0.
+    point : int, optional
+        The contact point that strikes, by its number (0 a free chain's base, k the end of
+        link k); the tip (n) if not given.
 
     Returns
     -------
@@ -141,7 +150,7 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
     Raises
     ------
     ImpactgenError
-        For an unknown law, a negative coefficient, a tip that does not approach the
+        For an unknown law, a negative coefficient, a point that does not approach the
         surface, or a contact that jams (friction stops the normal motion from ever
         reversing: Painleve's paradox).
     """
@@ -153,11 +162,13 @@ def solve_impact(chain: RigidChain, q, u, law: str, e: float, mu: float) -> LawO
         raise ImpactgenError(f"the friction coefficient must be >= 0, got {excerpt(mu)}")
     q, u = np.asarray(q, dtype=float), np.asarray(u, dtype=float)
     M = chain.mass_matrix(q)
-    J = chain.tip_jacobian(q)
+    number = chain.n if point is None else point
+    J = chain.point_jacobian(q, number)
     W = J @ np.linalg.solve(M, J.T)
     v0 = J @ u
     if not v0[1] < 0:
-        raise ImpactgenError(f"the tip does not approach the surface (v_n = {v0[1]:.3g} m/s): no impact")
+        whose = "the tip" if number == chain.n else f"point {number}"
+        raise ImpactgenError(f"{whose} does not approach the surface (v_n = {v0[1]:.3g} m/s): no impact")
     path: list[tuple[float, float, float]] = [(0.0, float(v0[0]), float(v0[1]))]
     if law == "newton":
         P, P_c = _newton(W, v0, e, mu), math.nan

@@ -8,6 +8,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from .codegen.spec import point_number
+
 
 @dataclass
 class PhaseSpan:
@@ -80,10 +82,11 @@ class Impact:
         }
 
 
-def tip_impacts(impacts: list[Impact]) -> list[Impact]:
-    """The tip's impacts: what a run's summaries and the impact laws are made of (the joints'
-    impacts are listed beside them, each naming its point)."""
-    return [impact for impact in impacts if impact.point == "tip"]
+def first_of(impacts: list[Impact], n: int) -> Impact | None:
+    """The run's first impact, at whichever point (of impacts that began together, the first in
+    point order: the base, the joints by number, the tip, as the switch records come); None
+    without an impact. `n`: the chain's links."""
+    return min(impacts, key=lambda impact: (impact.t_start, point_number(impact.point, n)), default=None)
 
 
 def switch_list(items: list[tuple[float, str, str]]) -> list[dict[str, Any]]:

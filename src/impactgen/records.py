@@ -57,10 +57,10 @@ class Tallied(NamedTuple):
     residual: float
     n_switches: int
     n_stick_slip: int
-    impacts: int
-    joint_impacts: int
-    first_point: int  # k for joint k, n for the tip; 0 without an impact
-    v_n0: float  # the first impact's impulses and coefficients (COEFFICIENTS), NaN until it ended
+    impacts: int  # at every point
+    point_impacts: tuple[int, ...]  # at each point, by its number 0..n (0 a free chain's base; a pinned chain's pivot: 0)
+    first_point: int  # the first impact's point: 0 the base, k for joint k, n for the tip; none: 0 (pinned), -1 (free)
+    v_n0: float  # the first impact's impulses and coefficients (COEFFICIENTS, its point's own), NaN until it ended
     P_c: float
     P_r: float
     P_t: float
@@ -71,15 +71,21 @@ class Tallied(NamedTuple):
     y_final: tuple[float, ...]  # q, u, then the works and the impulses
 
 
-_Y_FINAL = len(Tallied._fields) - 1  # y_final, the last field, is the rest of a record's values
-
-
 class SummaryLayout(NamedTuple):
     """How the C engine's ig_summary record reads, made once per session from its cffi layout."""
 
     record: Any  # struct.Struct: every field as a Python value, in Tallied's order
     dtype: np.dtype  # the same record as a numpy structured dtype
     budget: Any  # struct.Struct: the energy budget's fields alone, in their order
+    lengths: tuple[int | None, ...]  # each field's element count (an array's), None for a scalar
+
+    def tallied(self, values: tuple) -> Tallied:
+        """The record's values (`record`'s, flat) as a Tallied, an array field as a tuple."""
+        fields, at = [], 0
+        for length in self.lengths:
+            fields.append(values[at] if length is None else values[at:at + length])
+            at += 1 if length is None else length
+        return Tallied._make(fields)
 
 
 class TallyRecords:
@@ -111,8 +117,7 @@ class TallyRecords:
         made = self._made[k]
         if made is None:
             record = self._layout.record
-            values = record.unpack_from(self._raw, k * record.size)
-            made = self._made[k] = Tallied._make(values[:_Y_FINAL] + (values[_Y_FINAL:],))
+            made = self._made[k] = self._layout.tallied(record.unpack_from(self._raw, k * record.size))
         return made
 
     def __len__(self) -> int:
@@ -168,13 +173,14 @@ def switch_record_layout(ffi) -> struct.Struct:
 
 def summary_layout(ffi, budget: tuple[str, ...]) -> SummaryLayout:
     """How an ig_summary record reads: as Python values in Tallied's order (which mirrors the
-    C struct's, y_final last: checked here, once per session), as a numpy dtype, and its
-    energy budget (the `budget` fields, in Tallied's order) alone."""
+    C struct's, y_final last: checked here, once per session; its arrays as tuples), as a numpy
+    dtype, and its energy budget (the `budget` fields, in Tallied's order) alone."""
     fields = ffi.typeof("ig_summary").fields
     if tuple(name for name, _ in fields) != Tallied._fields or fields[-1][1].type.kind != "array":
         raise AssertionError(f"records.Tallied does not mirror tally.h's ig_summary: {fields}")
     if [name for name in Tallied._fields if name in budget] != list(budget):
         raise AssertionError(f"the energy budget {budget} is not in ig_summary's order")
     others = tuple(name for name in Tallied._fields if name not in budget)
+    lengths = tuple(count for _, _, count, _ in _fields(ffi, "ig_summary"))
     return SummaryLayout(struct.Struct("=" + record_layout(ffi, "ig_summary")), record_dtype(ffi, "ig_summary"),
-                         struct.Struct("=" + record_layout(ffi, "ig_summary", others)))
+                         struct.Struct("=" + record_layout(ffi, "ig_summary", others)), lengths)

@@ -22,8 +22,7 @@ import numpy as np
 
 from .codegen.spec import point_name, point_number
 from .dense import NO_DENSE_OUTPUT, DenseSolution, NoDenseOutput
-from .impacts import (COEFFICIENT_UNITS, COEFFICIENTS, IMPACT_UNITS, Impact, PhaseSpan, impact_coefficients,
-                      tip_impacts)
+from .impacts import COEFFICIENT_UNITS, COEFFICIENTS, IMPACT_UNITS, Impact, PhaseSpan, first_of, impact_coefficients
 from .records import Tallied, TallyRecords
 from .scene import Scene, Solver, replace_solver
 from .summaries import (BUDGET, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, energy_balance, energy_budget,
@@ -32,7 +31,7 @@ from .validity import YieldScale, energy_warning, frozen_friction_warning, valid
 
 __all__ = [  # defined here, then kept where they were first imported from (impacts, summaries, records)
     "OUTPUT_UNITS", "Ready", "Trajectory", "Columns", "SimulationResult",
-    "PhaseSpan", "Impact", "tip_impacts", "impact_coefficients", "COEFFICIENT_UNITS", "COEFFICIENTS", "IMPACT_UNITS",
+    "PhaseSpan", "Impact", "first_of", "impact_coefficients", "COEFFICIENT_UNITS", "COEFFICIENTS", "IMPACT_UNITS",
     "energy_balance", "SUMMARY_LEADING", "SUMMARY_LATER", "ENERGY_TERMS", "BUDGET", "Tallied", "TallyRecords",
     "point_name", "point_number",
 ]
@@ -132,10 +131,12 @@ class SimulationResult:
     impacts : list of Impact
         One record per impact; `impacts_frame()` gives them as a pandas DataFrame.
     summary : dict
-        The run: its end state, energy budget over the whole run, impact count, the time
-        sustained contact began. For a run to separation it is the first impact's.
+        The run: its end state, energy budget over the whole run, the impacts of every
+        contact point (counted, and per point), the time sustained contact began. For a run
+        to separation it is the first impact's.
     first_impact : dict
-        The first impact alone (MODEL section 6), with its energy budget.
+        The run's first impact alone, at whichever point (MODEL section 6), with its energy
+        budget.
     warnings : list of str
         Where the result leaves the model's range of validity, and whether its energy
         budget fails to close (the integrator did not resolve the motion).

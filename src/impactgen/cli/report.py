@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from ..results import Impact, energy_balance
+from ..results import Impact, energy_balance, first_of
 
 
 def one_line(text: str) -> str:
@@ -20,7 +20,7 @@ US = 1e6  # the phases of an impact are given in microseconds from its start (a 
 
 def first_impact(result) -> Impact | None:
     """The run's first impact, of whichever contact point (the tip or a joint); None without one."""
-    return min(result.impacts, key=lambda impact: impact.t_start, default=None)
+    return first_of(result.impacts, result.n)
 
 
 def _point_name(point: str) -> str:
@@ -121,8 +121,10 @@ def format_summary(result) -> str:
     if run is not result.first_impact:
         sustained = (f", sustained contact from t = {run['t_sustained']:.6g} s"
                      if run["t_sustained"] is not None else "")
-        others = "the base and joints" if result.given_scene.free else "the joints"
-        joints = f" at the tip, {run['joint_impacts']} at {others}" if run["joint_impacts"] else ""
+        points = ", ".join(f"{count} at the {point}" if point in ("base", "tip") else f"{count} at {point}"
+                           for point, count in run["point_impacts"].items() if count)
+        struck = [count for count in run["point_impacts"].values() if count]
+        joints = f" ({points})" if len(struck) > 1 else ""  # (a run whose impacts are all at one point: as before)
         lines += [
             f"whole run to t = {run['t_final']:.6g} s: {run['impacts']} impacts{joints}{sustained}",
             "  final angles      q = [" + ", ".join(f"{v:.6g}" for v in run["q_final"]) + "] rad",
@@ -130,7 +132,7 @@ def format_summary(result) -> str:
             f"  kinetic energy    T0 = {run['T0']:.6g} J, Tf = {run['Tf']:.6g} J",
             _energy_line(run["energy"]),
             f"  deepest dent      delta_r = {run['delta_r']:.6g} m, largest force P_max = {run['P_max']:.6g} N"
-            + (" (of the tip's impacts)" if run["joint_impacts"] else ""),
+            + (" (of every point's impacts)" if joints else ""),
         ]
         if result.given_scene.free:  # where the base point ended, and how fast it went
             x, y, vx, vy = result.base[:, -1]

@@ -119,7 +119,7 @@ def read_measurements(data: str | Path | Any, scene: Scene, fitted: Sequence[str
         raise SceneError("data", f"expected a CSV file or a pandas DataFrame, got {type(data).__name__}")
     if len(frame) == 0:
         raise SceneError("DATA", f"{source} has no rows: give one row per measured impact")
-    results = set(summary_column_names(scene.n))
+    results = set(summary_column_names(scene.n, scene.free))
     inputs: dict[str, list[Any]] = {}
     measured: dict[str, np.ndarray] = {}
     sigmas: dict[str, np.ndarray] = {}

@@ -23,7 +23,7 @@ from ..codegen.parameters import Field
 from ..codegen.spec import point_name
 from ..impacts import COEFFICIENTS
 from ..records import Tallied
-from ..summaries import ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING, summary_unit
+from ..summaries import ENERGY_TERMS, PER_POINT, SUMMARY_LATER, SUMMARY_LEADING, chain_points, summary_unit
 
 # kinds the C glue reads and writes (native/fmi2: enum var_kind in model_fmu.h)
 KINDS = ("param", "q0", "u0", "state", "der", "output", "phase", "impacts", "delta_max", "delta_r", "P_max",
@@ -52,8 +52,8 @@ class Variable:
         """The index in the C table: a summary field's byte offset in ig_summary, else `index`."""
         if self.member is None:
             return str(self.index)
-        offset = f"offsetof(ig_summary, {self.member})"
-        return f"(int){offset}" if self.index == 0 else f"(int)({offset} + {self.index} * sizeof(double))"
+        entry = f"[{self.index}]" if self.member in ARRAY_MEMBERS else ""
+        return f"(int)offsetof(ig_summary, {self.member}{entry})"
 
 
 DISCRETE = (("delta_max", "m", "maximum compression of {of} last impact"),
@@ -162,7 +162,7 @@ def variables(model: ModelExpressions, scene, output_names: tuple[str, ...] = ()
                 description=f"the base point's velocity {axis} at the start", kind="u0", index=n + i)
     for kind, of in SUMMARIES:  # last, so that the value references above stay as they were
         for name, member, index, unit, doc in summary_fields(n, dof):
-            integer = TYPES[member] is int
+            integer = TYPES[member] in (int, tuple[int, ...])  # an int, or an entry of an array of them
             add(name=f"{kind}.{name}", type="Integer" if integer else "Real", causality="output",
                 variability="discrete" if integer else "continuous", initial="calculated", start=None, unit=unit,
                 description=f"{of}: {doc}", kind=kind, index=index, member=member)
@@ -181,7 +181,7 @@ SUMMARY_DOCS = {  # what each field is (summaries.py, MODEL section 6); units: s
     "t_contact": "contact time of the ended impacts", "t_impact": "start of the first impact (NaN: none)",
     "n_switches": "phase switches within the first impact",
     "n_stick_slip": "stick-slip changes within the first impact",
-    "impacts": "impacts of the tip", "joint_impacts": "impacts at the joints and a free chain's base",
+    "impacts": "impacts at every contact point", "point_impacts": "impacts at {point}",
     "first_point": "point of the first impact: n the tip, k joint k, 0 a free chain's base; none: 0 "
                    "(pinned) or -1 (free)",
     "t_sustained": "start of sustained contact (NaN: none)", "t_final": "time at its end",
@@ -197,6 +197,9 @@ SUMMARY_DOCS = {  # what each field is (summaries.py, MODEL section 6); units: s
 }
 
 
+ARRAY_MEMBERS = ("y_final", "point_impacts")  # ig_summary's arrays: a variable reads one entry
+
+
 def _summary_unit(name: str) -> str:
     """A summary field's unit (summaries.SUMMARY_UNITS) as the modelDescription writes it."""
     unit = summary_unit(name) or ""
@@ -206,16 +209,25 @@ def _summary_unit(name: str) -> str:
 def summary_fields(n: int, dof: int | None = None) -> list[tuple[str, str, int, str, str]]:
     """A summary's fields as `impactgen run --json` and the sweep's columns name them (name,
     ig_summary member, entry of an array member, unit, what), in the sweep's order; `dof` the
-    model's coordinates (n, and a free chain's base point's two), where its speeds begin."""
+    model's coordinates (n, and a free chain's base point's two), where its speeds begin. The
+    impacts per point are point_impacts[k], k the point's number (as contact[k]: 0 a free
+    chain's base, k joint k, n the tip); the sweep's columns name them point_impacts.tip, ..."""
     def field(name: str, member: str | None = None) -> tuple[str, str, int, str, str]:
         return name, member or name, 0, _summary_unit(member or name), SUMMARY_DOCS[member or name]
+
+    def later(name: str) -> list[tuple[str, str, int, str, str]]:
+        if name not in PER_POINT:
+            return [field(name)]
+        return [(f"{name}[{k}]", name, k, _summary_unit(name), SUMMARY_DOCS[name].format(point=point_name(k, n)))
+                for k in chain_points(n, dof is not None and dof > n)]
 
     final = [(f"{which}_final[{i + 1}]", "y_final", i + offset, _summary_unit(f"{which}_final"),
               f"{what} of link {i + 1} at its end")
              for which, offset, what in (("u", n if dof is None else dof, "angular speed"), ("q", 0, "angle"))
              for i in range(n)]
     return [*(field(name) for name in (*SUMMARY_LEADING, "n_switches", "n_stick_slip")), *final,
-            *(field(name) for name in SUMMARY_LATER), *(field(f"energy.{name}", name) for name in ENERGY_TERMS),
+            *(entry for name in SUMMARY_LATER for entry in later(name)),
+            *(field(f"energy.{name}", name) for name in ENERGY_TERMS),
             *(field(f"coefficients.{name}", name) for name in COEFFICIENTS)]
 
 

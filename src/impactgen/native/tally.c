@@ -1,24 +1,30 @@
 /*
  * tally.c: the tallies of a run's summaries (tally.h), followed by ig_run segment by segment.
+ * Every contact point's impacts make them: the first impact is the run's first at whichever
+ * point, with that point's own values; the run's record is over every point's impacts.
  */
 #include <math.h>
 #include <string.h>
 
 #include "tally.h"
 
-/* ---- impact coefficients (MODEL section 9): the tip's own works, impulses and normal speed at
- * a sample, the first impact's maximum compression, and the coefficients from the three
- * samples ---- */
-static void read_tip(ig_point *point, const double *y, const double *out)
+/* The machine index k of the contact point numbered `number` (ig_segment.point). */
+static int point_index(int number)
 {
-    model_tip_works(y, &point->W_normal_tip, &point->W_friction_tip);
-    point->P_normal = y[MODEL_Y_P_normal];
-#ifdef MODEL_Y_P_friction
-    point->P_friction = y[MODEL_Y_P_friction];
-#else
-    point->P_friction = 0.0;
-#endif
-    point->v_n = out[MODEL_OUT_v_By];
+    for (int k = 0; k < MODEL_NCONTACT; ++k) {
+        if (model_point_number(k) == number) return k;
+    }
+    return MODEL_TIP_POINT;  /* (every record names a point of the machine) */
+}
+
+/* ---- impact coefficients (MODEL section 9): a point's own works, impulses and normal speed
+ * at a sample, the first impact's maximum compression, and the coefficients from the three
+ * samples ---- */
+static void read_own(ig_point *point, int k, double t, const double *y, const double *out)
+{
+    ig_read_point(point, t, y, out);
+    model_point_integrals(k, y, point->own);
+    point->v_n = out[model_point_output(k, MODEL_POINT_V_Y)];
 }
 
 /* The values a summary reads at sample k of the buffers. */
@@ -34,60 +40,62 @@ void ig_read_point(ig_point *point, double t, const double *y, const double *out
     point->W_friction = 0.0;
 #endif
     memcpy(point->y, y, sizeof point->y);
-    read_tip(point, y, out);
 }
 
-/* Follow the first impact's maximum compression (the latest, after a reloading). */
-static void tally_coefficients(ig_tally *a, const ig_segment *seg, double t, const double *y, const double *out)
-{
-    if (a->impacts == 1 && a->ended == 0 && (seg->act & MODEL_ACT_MAX_COMPRESSION)) {
-        ig_read_point(&a->first_max, t, y, out);
-        a->first_compressed = 1;
-    }
-}
-
-/* The first impact's impulses and coefficients, from its start, maximum compression and end;
- * NAN while it has not ended (or never reached maximum compression). */
+/* The first impact's impulses and coefficients, from its start, maximum compression and end
+ * (its point's own values); NAN while it has not ended (or never reached maximum compression). */
 static void summarize_coefficients(const ig_tally *a, ig_summary *out)
 {
-    const ig_point *b = &a->first_begin, *m = &a->first_max, *e = &a->first_end;
-    out->v_n0 = a->impacts ? b->v_n : NAN;
+    enum { W_N, W_F, P_N, P_F };
+    const double *b = a->first_begin.own, *m = a->first_max.own, *e = a->first_end.own;
+    out->v_n0 = a->impacts ? a->first_begin.v_n : NAN;
     out->P_c = out->P_r = out->P_t = out->e_N = out->e_P = out->e_E = out->friction_share = NAN;
-    if (a->ended == 0 || !a->first_compressed) return;
-    const double W_c = m->W_normal_tip - b->W_normal_tip, W_r = e->W_normal_tip - m->W_normal_tip;
-    const double W_f = e->W_friction_tip - b->W_friction_tip;
-    out->P_c = m->P_normal - b->P_normal;
-    out->P_r = e->P_normal - m->P_normal;
-    out->P_t = e->P_friction - b->P_friction;
-    out->e_N = -e->v_n / b->v_n;
+    if (!a->first_ended || !a->first_compressed) return;
+    const double W_c = m[W_N] - b[W_N], W_r = e[W_N] - m[W_N];
+    const double W_f = e[W_F] - b[W_F];
+    out->P_c = m[P_N] - b[P_N];
+    out->P_r = e[P_N] - m[P_N];
+    out->P_t = e[P_F] - b[P_F];
+    out->e_N = -a->first_end.v_n / a->first_begin.v_n;
     out->e_P = out->P_r / out->P_c;
     out->e_E = sqrt(W_r / -W_c);
     out->friction_share = W_f / (W_c + W_r + W_f) + 0.0;  /* + 0.0: no -0 without friction */
+}
+
+/* An impact of point k begins at `start`, at the sample (t, y, out): counted; the run's first
+ * if none was. */
+static void begin_impact(ig_tally *a, int k, double start, double t, const double *y, const double *out)
+{
+    const int number = model_point_number(k);
+    a->impacts++;
+    a->point_impacts[number]++;
+    a->now[k] = (ig_impact_now){.start = start, .open = 1};
+    if (a->first_k < 0) {
+        a->first_k = k;
+        a->first_point = number;
+        read_own(&a->first_begin, k, t, y, out);
+    }
 }
 
 void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact)
 {
     memset(tally, 0, sizeof *tally);
     tally->first_point = IG_NO_POINT;
+    tally->first_k = -1;
     ig_read_point(&tally->start, t0, y0, out0);
     tally->last = tally->start;
     tally->t_sustained = NAN;
-    if (in_contact) {
-        tally->first_point = MODEL_NQ;
-        tally->impacts = 1;
-        tally->first_begin = tally->start;
-        tally->now_start = t0;
-    }
+    if (in_contact) begin_impact(tally, MODEL_TIP_POINT, t0, t0, y0, out0);
 }
 
 void ig_tally_start(ig_tally *tally, const model_machine *m, int start, double t0, const double *y0,
                     const double *out0)
 {
-    ig_tally_begin(tally, t0, y0, out0, start == MODEL_START_CONTACT);
-    for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the joints in contact from the start (the tip: above) */
-        if (model_point_number(k) == MODEL_NQ || m->point[k].state == MODEL_MACHINE_FREE) continue;
-        tally->joint_impacts++;
-        if (tally->first_point == IG_NO_POINT) tally->first_point = model_point_number(k);
+    ig_tally_begin(tally, t0, y0, out0, 0);
+    for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the points in contact from the start, in point order */
+        const int in_contact = k == MODEL_TIP_POINT ? start == MODEL_START_CONTACT
+                                                    : m->point[k].state != MODEL_MACHINE_FREE;
+        if (in_contact) begin_impact(tally, k, t0, t0, y0, out0);
     }
 }
 
@@ -109,65 +117,70 @@ void ig_record_point(ig_segment *rec, const model_machine *m, int k, double t, l
     rec->R_res = r->R_res;
 }
 
-/* Add the latest impact's record (a->now_...) to the run's: the largest delta_max and P_max,
- * the deepest dent (the first of equals), its contact time. */
-static void fold_impact(ig_tally *a, double contact, int first_folded)
+/* Add an impact's record (`now`, of point `number`) to the run's: the largest delta_max and
+ * P_max, the deepest dent (of equals, the one that began first, then in point order), its
+ * contact time. */
+static void fold_impact(ig_tally *a, const ig_impact_now *now, int number, double contact)
 {
-    if (a->now_delta_max > a->delta_max) a->delta_max = a->now_delta_max;
-    if (a->now_P_max > a->P_max) a->P_max = a->now_P_max;
-    if (first_folded || a->now_delta_r > a->deepest_delta_r) {
-        a->deepest_delta_r = a->now_delta_r;
-        a->deepest_R_res = a->now_R_res;
+    if (now->delta_max > a->delta_max) a->delta_max = now->delta_max;
+    if (now->P_max > a->P_max) a->P_max = now->P_max;
+    const int deeper = now->delta_r > a->deepest_delta_r ||
+        (now->delta_r == a->deepest_delta_r && (now->start < a->deepest_start ||
+                                                (now->start == a->deepest_start && number < a->deepest_point)));
+    if (a->ended++ == 0 || deeper) {
+        a->deepest_delta_r = now->delta_r;
+        a->deepest_R_res = now->R_res;
+        a->deepest_start = now->start;
+        a->deepest_point = number;
     }
     a->t_contact += contact;
 }
 
-/* Follow one switch record (at sample seg->sample of the buffers) in the tally: the tip's make
- * the summaries, the joints' are counted. */
+/* Follow one switch record (at sample seg->sample of the buffers) in the tally: every point's
+ * make the run's summaries, the first impact's point's make the first impact's. */
 void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, const double *y_buf,
-                          const double *out_buf)
+                      const double *out_buf)
 {
-    if ((seg->act & MODEL_ACT_IMPACT_BEGIN) && a->first_point == IG_NO_POINT) a->first_point = seg->point;
-    if (seg->point != MODEL_NQ) {  /* a joint's: counted; the summaries are the tip's (the chain's end) */
-        if (seg->act & MODEL_ACT_IMPACT_BEGIN) a->joint_impacts++;
-        return;
-    }
-    const long k = seg->sample;
-    const double *y = y_buf + (size_t)k * MODEL_NSTATE, *out = out_buf + (size_t)k * MODEL_NOUT;
+    const long i = seg->sample;
+    const int k = point_index(seg->point);
+    const double *y = y_buf + (size_t)i * MODEL_NSTATE, *out = out_buf + (size_t)i * MODEL_NOUT;
+    ig_impact_now *now = &a->now[k];
     if (seg->next_state == MODEL_MACHINE_SUSTAINED && seg->state != MODEL_MACHINE_SUSTAINED &&
         isnan(a->t_sustained)) {
         a->t_sustained = seg->t;
     }
-    if (seg->act & MODEL_ACT_IMPACT_BEGIN) {
-        if (++a->impacts == 1) ig_read_point(&a->first_begin, t_buf[k], y, out);
-        a->now_start = seg->t;
-        a->now_delta_max = a->now_P_max = a->now_delta_r = a->now_R_res = 0.0;
-    }
-    if (a->impacts == 0) return;
+    if (seg->act & MODEL_ACT_IMPACT_BEGIN) begin_impact(a, k, seg->t, t_buf[i], y, out);
+    if (!now->open) return;  /* a flight before the point's first impact */
+    const int in_first = k == a->first_k && !a->first_ended;
     if (seg->act & MODEL_ACT_MAX_COMPRESSION) {
-        a->now_delta_max = seg->delta_max;
-        a->now_P_max = seg->P_max;
-        a->now_delta_r = seg->delta_r;
-        a->now_R_res = seg->R_res;
+        now->delta_max = seg->delta_max;
+        now->P_max = seg->P_max;
+        now->delta_r = seg->delta_r;
+        now->R_res = seg->R_res;
+        if (in_first) {  /* the first impact's maximum compression (the latest, after a reloading) */
+            read_own(&a->first_max, k, t_buf[i], y, out);
+            a->first_compressed = 1;
+        }
     }
-    if (a->impacts == 1) {
+    if (in_first) {
         if (seg->act & MODEL_ACT_SLIP) a->first_stick_slip++;
         if (seg->state != MODEL_MACHINE_FREE && seg->next_state != seg->state) a->first_switches++;
     }
     if (seg->act & MODEL_ACT_IMPACT_END) {
 #if MODEL_RATE_LAW
-        a->now_delta_r = seg->delta_r;  /* a damped law lets go while penetrating: that depth */
+        now->delta_r = seg->delta_r;  /* a damped law lets go while penetrating: that depth */
 #endif
-        fold_impact(a, seg->t - a->now_start, a->ended++ == 0);
-        if (a->impacts == 1) {
-            ig_read_point(&a->first_end, t_buf[k], y, out);
-            a->first_delta_max = a->now_delta_max;
-            a->first_P_max = a->now_P_max;
-            a->first_delta_r = a->now_delta_r;
-            a->first_R_res = a->now_R_res;
+        now->open = 0;
+        fold_impact(a, now, seg->point, seg->t - now->start);
+        if (in_first) {
+            read_own(&a->first_end, k, t_buf[i], y, out);
+            a->first_ended = 1;
+            a->first_delta_max = now->delta_max;
+            a->first_P_max = now->P_max;
+            a->first_delta_r = now->delta_r;
+            a->first_R_res = now->R_res;
         }
     }
-    tally_coefficients(a, seg, t_buf[k], y, out);
 }
 
 /* A summary from sample `from` to sample `to` (the energies, the works, the end state). */
@@ -192,7 +205,7 @@ static void summarize_first(const ig_tally *a, ig_summary *out)
     out->n_switches = a->first_switches;
     out->n_stick_slip = a->first_stick_slip;
     out->impacts = a->impacts;
-    out->joint_impacts = a->joint_impacts;
+    memcpy(out->point_impacts, a->point_impacts, sizeof out->point_impacts);
     out->first_point = a->first_point;
     out->t_sustained = a->t_sustained;
     summarize_coefficients(a, out);
@@ -200,9 +213,10 @@ static void summarize_first(const ig_tally *a, ig_summary *out)
 
 void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
 {
-    const int open = a->impacts > a->ended;  /* the latest impact is still in contact */
     ig_tally all = *a;
-    if (open) fold_impact(&all, a->last.t - a->now_start, a->ended == 0);
+    for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the impacts still in contact, counted to the last sample */
+        if (a->now[k].open) fold_impact(&all, &a->now[k], model_point_number(k), a->last.t - a->now[k].start);
+    }
     memset(run, 0, sizeof *run);
     summarize_between(&a->start, &a->last, run);
     run->delta_max = all.delta_max;
@@ -216,12 +230,13 @@ void ig_summarize(const ig_tally *a, ig_summary *run, ig_summary *first)
         return;
     }
     memset(first, 0, sizeof *first);
-    const int first_open = a->ended == 0;
+    const int first_open = !a->first_ended;
+    const ig_impact_now *now = &a->now[a->first_k];
     summarize_between(&a->first_begin, first_open ? &a->last : &a->first_end, first);
-    first->delta_max = first_open ? a->now_delta_max : a->first_delta_max;
-    first->P_max = first_open ? a->now_P_max : a->first_P_max;
-    first->delta_r = first_open ? a->now_delta_r : a->first_delta_r;
-    first->R_res = first_open ? a->now_R_res : a->first_R_res;
+    first->delta_max = first_open ? now->delta_max : a->first_delta_max;
+    first->P_max = first_open ? now->P_max : a->first_P_max;
+    first->delta_r = first_open ? now->delta_r : a->first_delta_r;
+    first->R_res = first_open ? now->R_res : a->first_R_res;
     first->t_contact = first_open ? 0.0 : a->first_end.t - a->first_begin.t;
     summarize_first(a, first);
 }

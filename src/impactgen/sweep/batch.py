@@ -252,7 +252,7 @@ def _may_warn(plan: Plan, summaries: np.ndarray, contact: np.ndarray, chain_leng
     scene = plan.scene
     rtol = scene.solver.rtol
     dm = summaries["delta_max"]
-    flagged = summaries["impacts"] + summaries["joint_impacts"] > 1
+    flagged = summaries["impacts"] > 1
     resolution = rtol * chain_length  # the angles carry rtol |q|
     flagged |= (dm > 0) & (dm < SCREEN_MARGIN * RESOLUTION_MARGIN * resolution)
     if scene.contact.model == "three-phase":

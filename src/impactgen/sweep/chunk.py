@@ -12,9 +12,11 @@ import numpy as np
 
 from ..engines import simulate
 from ..errors import ImpactgenError, SceneError
+from ..codegen.spec import point_name
 from ..export import trajectory_columns
 from ..results import COEFFICIENTS, ENERGY_TERMS, SUMMARY_LATER, SUMMARY_LEADING
 from ..scene import Scene, scene_from_dict, scene_with
+from ..summaries import PER_POINT, chain_points
 from . import batch, execute
 
 STATUS_INVALID = "invalid"  # the scene checks refused the case's values
@@ -55,12 +57,20 @@ def run_case(out: "ChunkColumns", base: Scene, index: int, overrides: dict[str, 
 SCALARS = (*SUMMARY_LEADING, "n_switches", "n_stick_slip")  # the summary's leading scalars, its lists counted
 
 
-def summary_column_names(n: int) -> list[str]:
-    """The result columns of a sweep's table for an n-link scene, in their order: the names a
-    fit's measurements are given by (u_final[2], coefficients.e_N, ...)."""
+def summary_column_names(n: int, free: bool = False) -> list[str]:
+    """The result columns of a sweep's table for an n-link scene (`free`: a free chain), in
+    their order: the names a fit's measurements are given by (u_final[2], coefficients.e_N,
+    ...); the impacts per point as point_impacts.tip, point_impacts.joint 2, ..."""
     return [*SCALARS, *(f"u_final[{i + 1}]" for i in range(n)), *(f"q_final[{i + 1}]" for i in range(n)),
-            *SUMMARY_LATER, *(f"energy.{name}" for name in ENERGY_TERMS),
-            *(f"coefficients.{name}" for name in COEFFICIENTS)]
+            *(column for name in SUMMARY_LATER for column in _later_names(name, n, free)),
+            *(f"energy.{name}" for name in ENERGY_TERMS), *(f"coefficients.{name}" for name in COEFFICIENTS)]
+
+
+def _later_names(name: str, n: int, free: bool) -> list[str]:
+    """The columns of a summary entry after the final state: one, or one per point (PER_POINT)."""
+    if name not in PER_POINT:
+        return [name]
+    return [f"{name}.{point_name(k, n)}" for k in chain_points(n, free)]
 
 
 Record = tuple[bytes, np.dtype]  # a summary's C record and its dtype (SimulationResult.summary_record)
@@ -85,7 +95,8 @@ def summary_columns(records: list[tuple[Record, tuple[int, int]] | None]) -> dic
     for k in cases:
         models.setdefault(records[k][0][1], []).append(k)
     n = max(records[k][1][0] for k in cases)
-    columns = {name: np.full(len(records), np.nan) for name in summary_column_names(n)}
+    free = any(records[k][1][1] > records[k][1][0] for k in cases)  # (n, dof): a free chain's base point's two
+    columns = {name: np.full(len(records), np.nan) for name in summary_column_names(n, free)}
     integers: set[str] = set()
     for dtype, rows in models.items():
         part = _record_columns(np.frombuffer(b"".join(records[k][0][0] for k in rows), dtype), *records[rows[0]][1])
@@ -106,7 +117,12 @@ def _record_columns(table: np.ndarray, n: int, dof: int) -> dict[str, np.ndarray
     columns = {name: _column(table[name]) for name in SCALARS}
     columns.update({f"u_final[{i + 1}]": y[:, dof + i].copy() for i in range(n)})
     columns.update({f"q_final[{i + 1}]": y[:, i].copy() for i in range(n)})
-    columns.update({name: _column(table[name]) for name in SUMMARY_LATER})
+    for name in SUMMARY_LATER:
+        if name in PER_POINT:  # an array by point number: one column per point, by its name
+            columns.update({f"{name}.{point_name(k, n)}": _column(table[name][:, k])
+                            for k in chain_points(n, dof > n)})
+        else:
+            columns[name] = _column(table[name])
     columns.update({f"energy.{name}": _column(table[name]) for name in ENERGY_TERMS})
     columns.update({f"coefficients.{name}": _column(table[name]) for name in COEFFICIENTS})  # the first impact's
     return columns
