@@ -36,9 +36,16 @@ static void length_slots(int *slot)
 
 /* 0 when this model's contact points are those the values in p need at the start y: no
  * pruned joint can reach the surface (model_pruned_reach) and every joint it has can (as
- * engines.reachable_joints decides the model's joints); else the first joint that differs. */
+ * engines.reachable_joints decides the model's joints); else the first joint that differs.
+ * A free chain's model has every point, whatever the values: always 0. */
 static int other_model(model_params *p, const double *y, const int *slot)
 {
+#ifdef MODEL_FREE
+    (void)p;
+    (void)y;
+    (void)slot;
+    return 0;
+#else
     const int pruned = model_pruned_reach(p, y);
     if (pruned != 0) return pruned;
     const double y_s = model_surface_at_start(p, y);
@@ -51,12 +58,16 @@ static int other_model(model_params *p, const double *y, const int *slot)
         if (!(reach >= depth)) return joint;
     }
     return 0;
+#endif
 }
 
 /* The contact constants the validity warnings read of case p: the point of its first impact's
- * (the three-phase law's; NAN for the others, whose impacts the warnings do not judge so). */
-static void contact_of(const model_params *p, int first_point, double *out)
+ * (the three-phase law's; NAN for the others, whose impacts the warnings do not judge so), and
+ * that point's delta_max (delta_max_of[point], by point number: a joint's or a free chain's
+ * base point's impact is not in the summary, which is the tip's). */
+static void contact_of(const model_params *p, int first_point, const double *delta_max_of, double *out)
 {
+    out[3] = first_point >= 0 && first_point <= MODEL_NQ ? delta_max_of[first_point] : 0.0;
 #if MODEL_PLASTIC && !MODEL_THORNTON
     int k = MODEL_TIP_POINT;
     for (int j = 0; j < MODEL_NCONTACT; ++j) {
@@ -73,10 +84,14 @@ static void contact_of(const model_params *p, int first_point, double *out)
 }
 
 /* One case, from its start to its end, as phases.run runs it summary only: ig_run called
- * again with emptied buffers while they fill. Returns ig_run's last flag. */
+ * again with emptied buffers while they fill; delta_max_of[k], point k's delta_max at its latest
+ * maximum compression (as phases._impacts reads the switch records; 0: none). Returns ig_run's
+ * last flag. */
 static int run_case(ig_solver *s, model_machine *m, model_params *p, const ig_batch_settings *c, double *y,
-                    double *t_buf, double *y_buf, double *out_buf, ig_segment *records, ig_tally *tally)
+                    double *t_buf, double *y_buf, double *out_buf, ig_segment *records, ig_tally *tally,
+                    double *delta_max_of)
 {
+    for (int k = 0; k <= MODEL_NQ; ++k) delta_max_of[k] = 0.0;
     double t = 0.0;
     long recorded = 0;
     int n_written = 1;  /* the start, written by ig_run_begin */
@@ -86,6 +101,9 @@ static int run_case(ig_solver *s, model_machine *m, model_params *p, const ig_ba
         flag = ig_run(s, m, p, &t, y, c->t_stop, c->t_stop, c->atol, c->max_records - recorded, 0, t_buf, y_buf,
                       out_buf, NULL, BATCH_SAMPLES, &n_written, records, BATCH_RECORDS, &n_records, tally);
         recorded += n_records;
+        for (int r = 0; r < n_records; ++r) {
+            if (records[r].act & MODEL_ACT_MAX_COMPRESSION) delta_max_of[records[r].point] = records[r].delta_max;
+        }
         n_written = 0;
     } while (flag == IG_BUFFER_FULL || flag == IG_SEGMENTS_FULL);
     return flag;
@@ -105,7 +123,7 @@ int ig_batch_run(ig_solver *s, model_machine *m, const model_params *base, const
     }
     ig_segment records[BATCH_RECORDS];  /* a call's switch records: the tally has read them on return */
     double t_buf[BATCH_SAMPLES], y_buf[BATCH_SAMPLES * MODEL_NSTATE], out_buf[BATCH_SAMPLES * MODEL_NOUT];
-    double y[MODEL_NSTATE], atol_now[MODEL_NSTATE];
+    double y[MODEL_NSTATE], atol_now[MODEL_NSTATE], delta_max_of[MODEL_NQ + 1];
     ig_tally tally;
     ig_summary run, first;
     for (int i = 0; i < n; ++i) {
@@ -138,10 +156,10 @@ int ig_batch_run(ig_solver *s, model_machine *m, const model_params *base, const
                 flag[i] = start;
             } else {
                 memcpy(y, y_case, sizeof y);
-                flag[i] = run_case(s, m, &p, settings, y, t_buf, y_buf, out_buf, records, &tally);
+                flag[i] = run_case(s, m, &p, settings, y, t_buf, y_buf, out_buf, records, &tally, delta_max_of);
                 ig_summarize(&tally, &run, &first);
                 summaries[i] = (settings->run_to_time || flag[i] < 0) ? run : first;
-                contact_of(&p, summaries[i].first_point, contact + (size_t)i * IG_BATCH_CONTACT);
+                contact_of(&p, summaries[i].first_point, delta_max_of, contact + (size_t)i * IG_BATCH_CONTACT);
             }
         }
         wall_s[i] = now_s() - started;

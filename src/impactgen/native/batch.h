@@ -16,8 +16,10 @@
 #define IG_CASE_BAD_PARAMS 2   /* model_derive refused the values: flag is the parameter's index */
 #define IG_CASE_OTHER_MODEL 3  /* the values need another model's contact points: flag is the joint */
 #define IG_CASE_NOT_BEGUN 4    /* ig_run_begin refused the tolerances: flag is its return */
-#define IG_BATCH_CONTACT 3     /* values per case in contact[]: R and delta_c of the first impact's point
-                                  (the tip's without one), and the Jackson-Green exponent B (NAN: none) */
+#define IG_BATCH_CONTACT 4     /* values per case in contact[]: R and delta_c of the first impact's point
+                                  (the tip's without one), and the Jackson-Green exponent B (NAN: none);
+                                  the delta_max of that point's latest impact (0: none; the summary's are
+                                  the tip's) */
 
 /* How every case of a batch runs: as the scene's solver says, and as phases.run passes it to
  * ig_run_begin and ig_run (summary only: samples at the switches). */
