@@ -22,7 +22,7 @@ import numpy as np
 
 from ..laws import YIELD_ONSET
 from ..scene import TOUCH_TOLERANCE, Scene, split_key
-from ..validity import ENERGY_FLOOR, ENERGY_MARGIN, JACKSON_GREEN_MAX_W, RESOLUTION_MARGIN
+from ..validity import CHATTER_RATIO, ENERGY_FLOOR, ENERGY_MARGIN, JACKSON_GREEN_MAX_W, RESOLUTION_MARGIN
 
 INITIAL_KEYS = ("q", "q_deg", "u")  # [initial] keys the batch takes element by element
 BASE_KEYS = ("base", "base_velocity")  # and a free chain's base point's (x, y) and (vx, vy)
@@ -176,12 +176,14 @@ def run_plan(plan: Plan, values: np.ndarray, usable: np.ndarray) -> BatchRows:
         summaries = np.zeros(m, dtype)
         code, flag = np.zeros(m, np.intc), np.zeros(m, np.intc)
         contact, times = np.zeros((m, lib.IG_BATCH_CONTACT)), np.zeros(m)
+        begun, impacts = np.zeros(m, np.intc), np.zeros((m, lib.IG_BATCH_IMPACTS, lib.IG_BATCH_IMPACT_FIELDS))
         index = np.array(plan.param_index, np.intc)
         session = EngineSession.open(model, scene.solver)
         done = lib.ig_batch_run(session.solver, session.machine, plan.params, plan.settings, m, len(index),
                                 _c(ffi, "int *", index), _c(ffi, "double *", params), _c(ffi, "double *", starts),
                                 _c(ffi, "ig_summary *", summaries), _c(ffi, "int *", code), _c(ffi, "int *", flag),
-                                _c(ffi, "double *", contact), _c(ffi, "double *", times))
+                                _c(ffi, "double *", contact), _c(ffi, "double *", times), _c(ffi, "int *", begun),
+                                _c(ffi, "double *", impacts))
         if done != 0:
             raise AssertionError("ig_batch_run refused its arguments")
         ran = code == lib.IG_CASE_RAN
@@ -190,7 +192,7 @@ def run_plan(plan: Plan, values: np.ndarray, usable: np.ndarray) -> BatchRows:
         ok = ran & (flag == lib.IG_RUN_DONE)
         if scene.solver.t_end is not None:  # a run to a time is ok at its end (phases._end_without_event)
             ok |= ran & (flag == lib.IG_REACHED_END)
-        ok &= ~_may_warn(plan, summaries, contact, _lengths(plan, values[todo]).sum(axis=1))
+        ok &= ~_may_warn(plan, summaries, contact, begun, impacts, _lengths(plan, values[todo]).sum(axis=1))
         records[todo] = summaries
         wall[todo] = times
         again[todo[~ok]] = True
@@ -264,27 +266,53 @@ def _may_start_inside(plan: Plan, values: np.ndarray, y0: np.ndarray) -> np.ndar
     return inside
 
 
-def _may_warn(plan: Plan, summaries: np.ndarray, contact: np.ndarray, chain_length: np.ndarray) -> np.ndarray:
+def _may_warn(plan: Plan, summaries: np.ndarray, contact: np.ndarray, begun: np.ndarray, impacts: np.ndarray,
+              chain_length: np.ndarray) -> np.ndarray:
     """A screen of validity.validity_warnings and energy_warning: the cases that may have a
-    warning (near or past a threshold, or more than one impact) are True. The warnings' words
-    and their exact rules stay in validity.py: these cases run per case."""
+    warning (an impact near or past a threshold, flights near chattering, an impact the table
+    of `impacts` lacks) are True. Every impact is judged, at whichever point (the summary is the
+    tip's): `begun` and `impacts` are batch.c's table (IG_BATCH_IMPACT_FIELDS). The warnings'
+    words and their exact rules stay in validity.py: these cases run per case."""
     scene = plan.scene
     rtol = scene.solver.rtol
-    dm = contact[:, 3]  # the impact's own delta_max at its point (the summary's is the tip's)
-    flagged = summaries["impacts"] + summaries["joint_impacts"] > 1
-    resolution = rtol * chain_length  # the angles carry rtol |q|
-    flagged |= (dm > 0) & (dm < SCREEN_MARGIN * RESOLUTION_MARGIN * resolution)
+    flagged = begun > impacts.shape[1]  # impacts beyond the table's rows
+    listed = np.arange(impacts.shape[1]) < begun[:, None]
+    point, t_start, t_end, dm, R, dc = np.moveaxis(impacts, 2, 0)
+    resolution = (rtol * chain_length)[:, None]  # the angles carry rtol |q|
+    near = (dm > 0) & (dm < SCREEN_MARGIN * RESOLUTION_MARGIN * resolution)
     if scene.contact.model == "three-phase":
-        R, dc, B = contact[:, 0], contact[:, 1], contact[:, 2]
+        B = contact[:, 2:3]
         with np.errstate(all="ignore"):
             w = dm / dc
             a = np.sqrt(R * dm * (dm / (YIELD_ONSET * dc)) ** B)
-        flagged |= ~(dc > 0) | (w > JACKSON_GREEN_MAX_W / SCREEN_MARGIN) | ((w > 0) & (w < SCREEN_MARGIN))
-        flagged |= (dm >= YIELD_ONSET * dc / SCREEN_MARGIN) & ~(a < R / SCREEN_MARGIN)
+        near |= ~(dc > 0) | (w > JACKSON_GREEN_MAX_W / SCREEN_MARGIN) | ((w > 0) & (w < SCREEN_MARGIN))
+        near |= (dm >= YIELD_ONSET * dc / SCREEN_MARGIN) & ~(a < R / SCREEN_MARGIN)
+        flagged |= ~(contact[:, 1] > 0)
+    flagged |= (near & listed).any(axis=1)
+    if not (scene.solver.t_end is not None and scene.solver.sustained_contact):  # (validity_warnings' rule)
+        flagged |= _may_chatter(point, t_start, t_end, listed)
     budget = np.stack([summaries[name] for name in ("T0", "Tf", "W_normal", "W_friction", "W_gravity")])
     scale = np.abs(budget).max(axis=0)
     allowed = max(ENERGY_MARGIN * rtol, ENERGY_FLOOR) * scale
     flagged |= ~(np.abs(summaries["residual"]) <= allowed / SCREEN_MARGIN)
+    return flagged
+
+
+def _may_chatter(point: np.ndarray, t_start: np.ndarray, t_end: np.ndarray, listed: np.ndarray) -> np.ndarray:
+    """A screen of validity.chattering over each case's impacts (rows; columns in the order
+    they began): a point's flight to its next impact shorter than SCREEN_MARGIN times what
+    chattering allows (CHATTER_RATIO contact times of the impact before)."""
+    flagged = np.zeros(len(point), bool)
+    for j in range(1, point.shape[1]):
+        before = np.full(len(point), -1)
+        for i in range(j):  # the latest impact of the same point before impact j
+            before = np.where(point[:, i] == point[:, j], i, before)
+        rows = np.flatnonzero((before >= 0) & listed[:, j])
+        if not len(rows):
+            continue
+        b = before[rows]
+        start, end = t_start[rows, b], t_end[rows, b]
+        flagged[rows] |= ~(t_start[rows, j] - end >= SCREEN_MARGIN * CHATTER_RATIO * (end - start))
     return flagged
 
 
