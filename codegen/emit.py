@@ -304,9 +304,9 @@ def _context(model: ModelExpressions, prefix: str) -> EmitContext:
     jac = None
     if model.jacobian is not None:
         J = model.jacobian
-        entries = [(f"G[{i * 2 * n + j}]", t(J.G[i, j])) for i in range(n) for j in range(2 * n)]
+        entries = [(f"G[{i * 2 * dof + j}]", t(J.G[i, j])) for i in range(dof) for j in range(2 * dof)]
         jac_block = c_block(entries, "jac")
-        udot_used = [i for i in range(n) if f"udot{i + 1}" in jac_block.reads]
+        udot_used = [i for i in range(dof) if f"udot{i + 1}" in jac_block.reads]
         jac = {"kernel": _kernel(model, [jac_block]), "udot": udot_used,
                "friction": _kernel(model, [c_block([(r.name, r.expr) for r in J.friction_slopes], "fs")])
                if J.friction_slopes else None}

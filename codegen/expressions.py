@@ -60,7 +60,7 @@ class JacobianExpressions:
     each contact point's forces are added by the chain rule in C, from its PointMotion."""
 
     force_slopes: tuple[tuple[str, sm.Expr], ...]  # (phase, dF/d(delta))
-    G: sm.Matrix  # d(f0)/dy - (dM/dy) udot, f0 the forcing without contact; n x 2n, udot_k solved first
+    G: sm.Matrix  # d(f0)/dy - (dM/dy) udot, f0 the forcing without contact; dof x 2 dof, udot_k solved first
     friction_slopes: tuple[Named, ...] = ()  # dFf_dF, dFf_dv: F_f's derivatives over F and the point's v_x
 
 
@@ -295,14 +295,14 @@ def _jacobian(chain: ChainEquations, forcing: sm.Matrix, cases: tuple[ForceCase,
     """G = d(f0)/dy - (dM/dy) udot of the chain without contact, the slope of each force law
     and F_f's derivatives: what the chain rule through each point's forces needs."""
     s = chain.symbols
-    n = chain.n
-    y = list(s.q) + list(s.u)
-    udot = sm.symbols(f"udot1:{n + 1}")
+    dof = chain.dof  # the angles, and a free chain's base point (x_0, y_0)
+    y = list(s.coordinates) + list(s.speeds)
+    udot = sm.symbols(f"udot1:{dof + 1}")
     M = chain.mass_matrix
-    G = sm.zeros(n, 2 * n)
-    for i in range(n):
+    G = sm.zeros(dof, 2 * dof)
+    for i in range(dof):
         for j, v in enumerate(y):
-            dM_udot = sum(M[i, k].diff(v) * udot[k] for k in range(n)) if j < n else 0
+            dM_udot = sum(M[i, k].diff(v) * udot[k] for k in range(dof)) if j < dof else 0
             G[i, j] = forcing[i].diff(v) - dM_udot
     slopes = tuple((c.phase, sm.diff(c.expr, law.delta)) for c in cases)
     friction = ()

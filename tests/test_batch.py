@@ -157,3 +157,68 @@ def test_run_batch_issues_one_validity_warning():
     with pytest.warns(ValidityWarning) as caught:
         impactgen.run_batch("paper", {"initial.u[1]": [0.0, 0.0], "initial.u[2]": [-1e-3, -1e-2]})
     assert len([w for w in caught if issubclass(w.category, ValidityWarning)]) == 1
+
+
+def _free_cases(count: int, seed: int) -> list[tuple[int, dict]]:
+    """A dropped rod's start drawn wide: its angle, its base point's height (a few below the
+    plate: the scene refuses them) and its vertical speed."""
+    rng = np.random.default_rng(seed)
+    columns = {"initial.q_deg[1]": rng.uniform(5.0, 60.0, count),
+               "initial.base[2]": rng.choice([0.05, 0.02, -0.01], count, p=[0.6, 0.3, 0.1]),
+               "initial.base_velocity[2]": rng.uniform(-2.0, 0.0, count)}
+    return [(i, {key: float(values[i]) for key, values in columns.items()}) for i in range(count)]
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("rod-drop", {"solver.t_end": "separation"}),
+    ("chain-on-slope", {"solver.t_end": "separation"}),
+    ("chain-on-slope", {"solver.t_end": "separation", "surface.height": "initial"}),
+    ("rod-drop", {}),
+], ids=["rod-drop", "chain-on-slope", "chain-on-slope-initial-surface", "rod-drop-three-impacts"])
+def test_a_free_chain_s_batch_gives_the_per_case_rows_bit_for_bit(name, overrides):
+    """A free chain in C (its base point's position and velocity in the initial state, varied
+    as keys; a level or an inclined surface; surface.height given or "initial"): the rows the
+    per-case path gives, bit for bit. A case whose base point starts below the surface is a
+    row with the scene's message, not a crash; the batch takes most others, of one impact or of
+    several (rod-drop's own run: the base point, the tip, the base point again), each impact
+    screened for the warnings at its own point."""
+    base = impactgen.load_scene(name, overrides=overrides)
+    cases = _free_cases(40, 5)
+    batched = run_chunk(base.to_dict(), cases, CaseOptions())
+    one_by_one = ChunkColumns(cases)
+    for index, case in cases:
+        run_case(one_by_one, base, index, case)
+    _same(batched.columns, one_by_one.rows().columns)
+    plan = batch.plan_for(base, tuple(cases[0][1]))
+    assert plan is not None
+    values, usable = batch.case_values(plan.keys, [case for _, case in cases])
+    ran = batch.run_plan(plan, values, usable)
+    status = np.array(batched.columns["status"])
+    warned = np.array(batched.columns["warnings"]) != ""
+    assert ran.again[warned].all()  # (a case with a warning is worded by the per-case path)
+    assert ran.again.sum() < len(cases) / 4  # the batch took most cases (its screen is wide)
+    below = np.array([case["initial.base[2]"] < 0 for _, case in cases])
+    if base.surface_height is None:  # "initial": the surface through the lowest point, none below it
+        assert (status == "ok").all()
+        return
+    assert below.any() and (status[below] == "invalid").all() and (status[~below] == "ok").all()
+    messages = [m for m, b in zip(batched.columns["message"], below) if b]
+    assert all(m.startswith("initial.base: the free chain's base point starts") for m in messages)
+
+
+def test_a_level_case_of_an_inclined_scene_runs_on_the_level_model():
+    """surface.angle_deg varied on an inclined scene: the batch runs the inclined cases (a
+    negative angle too), and a level one (another model: gravity has no x component there) on
+    the per-case path; the rows are the per-case path's, bit for bit."""
+    base = impactgen.load_scene("chain-on-slope", overrides={"solver.t_end": "separation"})
+    cases = [(i, {"surface.angle_deg": a, "initial.q_deg[1]": q})
+             for i, (a, q) in enumerate([(0.0, -20.0), (10.0, -20.0), (25.0, -25.0), (-10.0, -20.0)])]
+    batched = run_chunk(base.to_dict(), cases, CaseOptions())
+    one_by_one = ChunkColumns(cases)
+    for index, case in cases:
+        run_case(one_by_one, base, index, case)
+    _same(batched.columns, one_by_one.rows().columns)
+    plan = batch.plan_for(base, tuple(cases[0][1]))
+    values, usable = batch.case_values(plan.keys, [case for _, case in cases])
+    assert batch.run_plan(plan, values, usable).again.tolist() == [True, False, False, False]
+    assert list(batched.columns["status"]) == ["ok"] * 4

@@ -76,7 +76,9 @@ def test_pruned_scene_generates_no_friction_and_no_plastic_code():
                                   ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
                                   ModelSpec(3, "hertz", "none", True, joints=(2,)),
                                   ModelSpec(3, "three-phase", "coulomb", True, True, (1, 2)),
-                                  ModelSpec(2, "three-phase", "none", True, True)],
+                                  ModelSpec(2, "three-phase", "none", True, True),
+                                  ModelSpec(1, "three-phase", "regularized", True, joints=(0,), free=True),
+                                  ModelSpec(3, "three-phase", "coulomb", True, True, (0, 1, 2), free=True, inclined=True)],
                          ids=lambda s: s.slug)
 def test_model_c_compiles_standalone_without_warnings(tmp_path, spec):
     gen = generate_model(spec)
@@ -144,18 +146,19 @@ def test_committed_generated_code_is_up_to_date(folder):
         assert (where / name).read_text() == text, f"regenerate {where} (see generated/README.md)"
 
 
-def _jacobian_and_differences(model, y: np.ndarray, p, columns: int) -> tuple[np.ndarray, np.ndarray]:
+def _jacobian_and_differences(model, y: np.ndarray, p, columns: int, stretch: float = 1.0
+                              ) -> tuple[np.ndarray, np.ndarray]:
     """The model's analytic Jacobian at y (of the motion, y = (q, u): the works and impulses
     are quadratures), and central differences of its right-hand side's motion rows in the
-    first `columns` states (the rest left 0)."""
-    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.links
+    first `columns` states (the rest left 0), their steps `stretch` times the contact's."""
+    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.dof  # the coordinates: angles (and x_0, y_0)
     M = lib.MODEL_NMOTION
     J = ffi.new("double[]", M * M)
     assert lib.model_jacobian(0.0, ffi.new("double[]", list(y)), J, p) == 0
     fd = np.zeros((M, M))
     for j in range(columns):
         # small steps: the penetration is only ~1e-5 m, and moves by L h per step in q
-        h = 1e-9 if j < n else (1e-8 if j < 2 * n else 1e-3)
+        h = stretch * (1e-9 if j < n else 1e-8) if j < 2 * n else 1e-3
         out = []
         for sign in (1, -1):
             yy = y.copy()
@@ -263,10 +266,62 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
         _assert_split_rhs(model, y, p)
 
 
+FREE_JACOBIAN_SPECS = [ModelSpec(n, "three-phase", friction, True, joints=tuple(range(n)), free=True, inclined=inclined)
+                       for n in (1, 2, 3) for inclined in (False, True) for friction in ("none", "regularized")]
+
+
+@needs_cc
+@pytest.mark.parametrize("spec", FREE_JACOBIAN_SPECS, ids=lambda s: s.slug)
+def test_analytic_jacobian_of_a_free_chain_matches_central_differences(spec):
+    """A free chain's Jacobian, over its angles and its base point's (x_0, y_0) and their
+    rates, on a level or an inclined surface: every point (the base point 0, the joints, the
+    tip) inside its own contact in each phase of the law, against central differences of the
+    right-hand side at random states."""
+    from impactgen.build import compile_model
+    model = compile_model(spec)
+    ffi, lib = model.ffi, model.lib
+    rng = np.random.default_rng(11 * spec.links + spec.inclined)
+    n, dof, N = spec.links, spec.dof, model.nstate
+    assert lib.MODEL_NDOF == dof == n + 2 and lib.MODEL_NMOTION == 2 * dof
+    p = ffi.new("model_params *")
+    law = {"E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0, "C_j": 1.6, "B": 0.175,
+           "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084, "mu": 0.2, "eps": 1e-3}
+    law.update(inv_delta_c=1 / law["delta_c"],
+               theta_c=np.pi * np.sqrt(law["delta_c"] / law["R"]) * 1.9 ** (-law["B"] / 2))
+    values = {**{f"L{i + 1}": rng.uniform(0.5, 1.5) for i in range(n)},
+              **{f"m{i + 1}": rng.uniform(0.5, 2.0) for i in range(n)}, "g": 9.81, "angle_deg": 20.0, **law}
+    assert ("angle_deg" in model.param_names) == spec.inclined
+    for name in model.param_names:
+        if name in values:
+            setattr(p, name, values[name])
+    own = [name for name, _ in ffi.typeof("model_point_contact").fields if name in law]
+    for phase in model.phases:
+        code = model.phases.index(phase) if phase != "restitution" else lib.MODEL_PHASE_RESTITUTION
+        for _ in range(2):
+            y = np.concatenate([rng.uniform(-2.5, -0.5, n), rng.uniform(-1, 1, 2),
+                                rng.uniform(-1, 1, dof), np.zeros(N - 2 * dof)])
+            # the heights of the base point (0), the joints and the tip (n)
+            heights = y[n + 1] + np.cumsum([0.0] + [values[f"L{i + 1}"] * np.sin(y[i]) for i in range(n)])
+            for point, number in zip(p.point, (*spec.joints, n)):  # every point inside its own contact
+                point.phase, point.y_s = code, heights[number] + 1.1e-5
+                for name in own:
+                    setattr(point, name, law[name])
+            # in free flight nothing is as stiff as a contact: steps of 1e-5 keep the rounding of
+            # gravity's rows (a free body's own angles barely move them) below the tolerance
+            J, fd = _jacobian_and_differences(model, y, p, 2 * dof, 1e4 if phase == "free" else 1.0)
+            scale = np.maximum(np.abs(fd).max(axis=1, keepdims=True), 1e-12)
+            if phase != "free":
+                assert np.abs(fd[dof:]).max() > 1e3  # the contact forces dominate the accelerations
+                assert np.abs(J[dof:, n:dof]).max() > 1e3  # and x_0, y_0 move them (y_0 at least)
+            assert np.all(np.abs(J - fd) <= 1e-5 * scale + 1e-9), phase
+            if phase != "free":
+                _assert_split_rhs(model, y, p)
+
+
 def _assert_split_rhs(model, y: np.ndarray, p) -> None:
     """The right-hand side in two parts, the motion's and the quadratures' (the works and
     impulses, which BDF integrates outside its Newton iteration), is the whole one."""
-    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.links
+    ffi, lib, N, n = model.ffi, model.lib, model.nstate, model.spec.dof
     y_c = ffi.new("double[]", list(y))
     whole, motion = ffi.new("double[]", N), ffi.new("double[]", 2 * n)
     quadratures = ffi.new("double[]", N - 2 * n)

@@ -185,3 +185,29 @@ def test_the_rigid_laws_give_a_free_rods_compliant_speeds():
     # the energetic law keeps the energy (e_E = 1); the rod's turning during the contact puts the
     # compliant e_N just above 1 (1.0003), with which Newton's law makes a little (2e-5 J)
     assert not rows["energetic"]["gains_energy"] and rows["newton"]["e"] == pytest.approx(1.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("name, t_end, rel", [("rod-drop", 0.25, 1e-7), ("chain-on-slope", 0.25, 1e-5)])
+def test_a_free_chains_analytic_jacobian_runs_as_the_difference_quotients_do(name, t_end, rel):
+    """BDF on a free chain with the generated Jacobian (over the angles and the base point's
+    x_0, y_0, every point's contact forces by the chain rule) and with CVODE's difference
+    quotients: the same impacts at the same points, the same first impact, to the tolerance
+    the runs were made with (rod-drop: level, both ends striking; chain-on-slope: an inclined
+    surface, three links, contact at the joints)."""
+    from impactgen.engines import model_spec
+    runs = {}
+    for jacobian in ("analytic", "difference"):
+        scene = impactgen.load_scene(name, overrides={"solver.method": "bdf", "solver.jacobian": jacobian,
+                                                      "solver.t_end": t_end})
+        assert model_spec(scene).jacobian == (jacobian == "analytic")
+        runs[jacobian] = impactgen.simulate(scene, warn=False)
+    analytic, difference = runs["analytic"], runs["difference"]
+    assert analytic.success and difference.success and len(analytic.impacts) >= 3
+    assert [i.point for i in analytic.impacts] == [i.point for i in difference.impacts]
+    assert {"base", "tip"} <= {i.point for i in analytic.impacts}
+    for a, d in zip(analytic.impacts, difference.impacts):
+        assert a.t_start == pytest.approx(d.t_start, rel=rel)
+        assert a.delta_max == pytest.approx(d.delta_max, rel=rel)
+    for key in ("t_impact", "t_contact", "delta_max", "delta_r", "P_max", "Tf"):
+        assert analytic.summary[key] == pytest.approx(difference.summary[key], rel=rel), key
+    assert analytic.y[:, -1] == pytest.approx(difference.y[:, -1], rel=100 * rel, abs=100 * rel)

@@ -35,9 +35,9 @@ def model_spec(scene: Scene, solver: Solver | None = None) -> ModelSpec:
     friction_law = contact.friction_mode if contact.friction > 0 else "none"
     sustained = solver.t_end is not None and solver.sustained_contact
     joints = reachable_joints(scene)
-    # the analytic Jacobian is written for a pinned chain and a rate-free law: a free chain's,
-    # or a rate-dependent law's, runs on CVODE's difference quotients
-    analytic = solver.jacobian == "analytic" and not scene.free and contact.model not in RATE_LAWS
+    # the analytic Jacobian is written for a rate-free law (pinned or free chain, level or
+    # inclined surface): a rate-dependent law's runs on CVODE's difference quotients
+    analytic = solver.jacobian == "analytic" and contact.model not in RATE_LAWS
     return ModelSpec(scene.n, contact.model, friction_law, analytic, sustained, joints,
                      scene.free, scene.surface_angle_deg != 0.0)
 

@@ -195,7 +195,7 @@ class ChunkColumns:
         if ran is not None:
             n = len(self.cases)
             columns.update(status=["ok"] * n, message=[""] * n, warnings=[""] * n, wall_s=ran.wall_s)
-            return ChunkRows({**columns, **_record_columns(ran.records, ran.links, ran.links)}, self.trajectories)
+            return ChunkRows({**columns, **_record_columns(ran.records, ran.links, ran.dof)}, self.trajectories)
         columns.update(status=self.status, message=self.message, warnings=self.warnings,
                        wall_s=np.array(self.wall_s, dtype=float))
         return ChunkRows({**columns, **summary_columns(self.summaries)}, self.trajectories)
