@@ -170,7 +170,7 @@ int ig_run_begin(ig_solver *s, model_machine *m, model_params *p, double t0, con
     t_buf[0] = t0;
     const int start = model_machine_start(m, p, t0, y_buf, run_to_time);
     model_outputs(t0, y_buf, out_buf, p);
-    ig_tally_start(tally, m, start, t0, y_buf, out_buf);
+    ig_tally_start(tally, m, t0, y_buf, out_buf);
     if (start == MODEL_START_ALONG || start == MODEL_START_AWAY) return start;
     model_machine_atol(m, p, rtol, atol, atol_now);
     const int flag = ig_solver_reset(s, rtol, atol_now, max_steps);

@@ -77,7 +77,7 @@ static void begin_impact(ig_tally *a, int k, double start, double t, const doubl
     }
 }
 
-void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact)
+void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0)
 {
     memset(tally, 0, sizeof *tally);
     tally->first_point = IG_NO_POINT;
@@ -85,17 +85,13 @@ void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *
     ig_read_point(&tally->start, t0, y0, out0);
     tally->last = tally->start;
     tally->t_sustained = NAN;
-    if (in_contact) begin_impact(tally, MODEL_TIP_POINT, t0, t0, y0, out0);
 }
 
-void ig_tally_start(ig_tally *tally, const model_machine *m, int start, double t0, const double *y0,
-                    const double *out0)
+void ig_tally_start(ig_tally *tally, const model_machine *m, double t0, const double *y0, const double *out0)
 {
-    ig_tally_begin(tally, t0, y0, out0, 0);
+    ig_tally_begin(tally, t0, y0, out0);
     for (int k = 0; k < MODEL_NCONTACT; ++k) {  /* the points in contact from the start, in point order */
-        const int in_contact = k == MODEL_TIP_POINT ? start == MODEL_START_CONTACT
-                                                    : m->point[k].state != MODEL_MACHINE_FREE;
-        if (in_contact) begin_impact(tally, k, t0, t0, y0, out0);
+        if (m->point[k].state != MODEL_MACHINE_FREE) begin_impact(tally, k, t0, t0, y0, out0);
     }
 }
 

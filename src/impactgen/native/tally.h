@@ -107,9 +107,8 @@ typedef struct {
     double y_final[MODEL_NSTATE];     /* the state at its end */
 } ig_summary;
 
-/* Begin the tally of a run at its first sample (t0, y0, with its outputs out0); in_contact:
- * the run starts with an impact of the tip (model_machine_start returned MODEL_START_CONTACT). */
-void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0, int in_contact);
+/* Begin the tally of a run at its first sample (t0, y0, with its outputs out0), no impact yet. */
+void ig_tally_begin(ig_tally *tally, double t0, const double *y0, const double *out0);
 
 /* The two summaries of a tallied run: over the whole run (an impact still in contact counted
  * to the run's last sample), and over its first impact (the whole run if it had none; an
@@ -123,10 +122,9 @@ void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impa
 void ig_read_point(ig_point *point, double t, const double *y, const double *out);
 
 /* Begin the tally of a run whose machine model_machine_start began at (t0, y0, with its
- * outputs out0) and answered `start`: ig_tally_begin, and every point in contact from the
- * start counted as an impact begun at t0, in point order (ig_run_begin's, and the FMU's). */
-void ig_tally_start(ig_tally *tally, const model_machine *m, int start, double t0, const double *y0,
-                    const double *out0);
+ * outputs out0): ig_tally_begin, and every point the machine started in contact counted as an
+ * impact begun at t0, in point order (ig_run_begin's, and the FMU's). */
+void ig_tally_start(ig_tally *tally, const model_machine *m, double t0, const double *y0, const double *out0);
 
 /* The switch record of contact point k (m->point[k], whose switch acted) at a switch at t
  * (sample `sample`) that `event` began; its `params` are left for the caller. */

@@ -50,8 +50,8 @@ int fmu_prepare(fmu_instance *c, const char **range)
     fmu_invalidate(c);
     const int bad = model_derive(&c->p, range);
     if (bad != MODEL_PARAMS_OK) return bad;
-    const int start = model_machine_start(&c->m, &c->p, c->t, c->y, 1);
-    ig_tally_start(&c->tally, &c->m, start, c->t, c->y, fmu_outputs(c));
+    model_machine_start(&c->m, &c->p, c->t, c->y, 1);  /* (its points in contact: the tally reads them) */
+    ig_tally_start(&c->tally, &c->m, c->t, c->y, fmu_outputs(c));
     double ev[MODEL_NEVENT];
     model_events(c->t, c->y, ev, &c->p);
     model_machine_sides(&c->m, ev);
