@@ -165,6 +165,13 @@ def test_a_rod_on_a_slope_gentler_than_atan_mu_stays_stuck():
     frictionless = 9.81 * math.sin(math.radians(angle)) * t[-1] ** 2 / 2
     assert abs(x0[-1]) < 2e-3 * frictionless
     assert result.summary["energy"]["residual"] == pytest.approx(0.0, abs=1e-9)
+    # laid at delta = 0, its ends vibrate on the slope only until their reloads peak: from
+    # then on (1.3 ms) both rest, stuck, held in sustained contact, and the rod does not move
+    rest = result.phases[-1]
+    assert (rest.phase, rest.slip_state, rest.ended_by) == ("sustained", "stick", "t_end") and rest.t0 < 2e-3
+    assert [impact.switches[-1][2] for impact in result.impacts] == ["sustained", "sustained"]
+    held = t > rest.t0
+    assert np.ptp(x0[held]) < 1e-12 and np.max(np.abs(result.base[2][held])) < 1e-9
 
 
 @pytest.mark.parametrize("name", ["rod-drop", "rocking-rod", "chain-on-slope"])
