@@ -36,9 +36,6 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     contact, no point touches the surface any more."""
     if method not in METHODS and integrate is solve_ivp_segment:
         raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
-    if scene.solver.t_end is not None and scene.solver.sustained_contact:
-        raise SceneError("solver.sustained_contact", "the reference engine simulates every impact "
-                         "and has no sustained-contact phase: set it to false to compare the engines")
     run = _Run(scene, model or ReferenceModel.from_scene(scene), method, rtol, atol, integrate, engine, t_eval,
                dense_output)
     return run.no_impact() or run.to_the_end()
