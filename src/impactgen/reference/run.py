@@ -87,6 +87,26 @@ def under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[in
                "through the surface")
 
 
+def coincident(events: dict, fired: list[str], t_before: float, y_before: np.ndarray, t: float,
+               y: np.ndarray) -> list[str]:
+    """The events besides `fired` that crossed in their direction in the segment's last step,
+    from (t_before, y_before) to the event point (t, y): their roots lie within rounding of
+    the first one's, at or past it. solve_ivp reports the roots in a step in time order up to
+    the first terminal one, so one a rounding later went unreported (both ends of a rod lying
+    flat on the surface reach their maximum compression at once), as a root finder that
+    reports every root at the time it returns would not."""
+    if not fired:
+        return []
+    crossed = []
+    for name, event in events.items():
+        if name in fired:
+            continue
+        now, then = event(t, y), event(t_before, y_before)
+        if (event.direction < 0 and then > 0 >= now) or (event.direction > 0 and then < 0 <= now):
+            crossed.append(name)
+    return crossed
+
+
 class _Run:
     """One run as the phase loop goes: the model with its points' phases, the time and state,
     the samples, spans, impacts and each point's integrals, the counters and dense pieces."""
@@ -169,10 +189,12 @@ class _Run:
         label, friction = segment_label(model)
         if len(self.spans) >= MAX_SEGMENTS:
             raise SolverError(f"more than {MAX_SEGMENTS} phase switches; shorten solver.t_end", label, self.t)
-        seg = self.integrate_segment(in_contact, label)
+        events = segment_events(model, self.y)
+        seg = self.integrate_segment(in_contact, label, events)
         self.record(seg, in_contact, label)
+        before = (float(seg.t[-2]), seg.y[-2]) if len(seg.t) > 1 else (self.t, self.y)
         self.t, self.y = float(seg.t[-1]), seg.y[-1, :self.nstate].copy()
-        fired = seg.fired
+        fired = seg.fired + coincident(events, seg.fired, *before, self.t, seg.y[-1])
         self.spans.append(PhaseSpan(label, self.spans[-1].t1 if self.spans else 0.0, self.t,
                                     fired[0] if fired else "t_end", friction))
         if not fired:
@@ -180,7 +202,7 @@ class _Run:
             return False
         return not self.apply(fired)
 
-    def integrate_segment(self, in_contact: list[ContactPoint], label: str) -> Segment:
+    def integrate_segment(self, in_contact: list[ContactPoint], label: str, events: dict) -> Segment:
         """One segment from (t, y), each point in contact integrating its own works and
         impulses as extra states when several are; a failure keeps the samples it made."""
         more = self.integrals.extra_states(in_contact)
@@ -189,8 +211,8 @@ class _Run:
         extra = {"dense": True} if self.dense else {}
         tip = self.model.tip  # the integrators pass point n's phase on to rhs (ReferenceModel.rhs)
         try:
-            seg = self.integrate(self.model, tip.phase, self.t, y0, self.t_final, segment_events(self.model, self.y),
-                                 self.method, self.rtol, atol, **extra)
+            seg = self.integrate(self.model, tip.phase, self.t, y0, self.t_final, events, self.method, self.rtol, atol,
+                                 **extra)
         except SolverError as error:
             partial = getattr(error, "partial", None)
             if partial is not None and len(partial[0]):
