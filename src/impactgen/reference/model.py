@@ -183,7 +183,7 @@ class ReferenceModel:
             if phase == "free":
                 continue
             _, y_k, v_x, v_y = self.kinematics(y, p)
-            resting = phase == "sustained"
+            resting = phase == "sustained" and self.sustained  # (a scene without it has no such phase)
             F = 0.0 if resting else p.contact.normal_force(phase, p.contact.y_s - y_k, -v_y)
             held = p is still or (p.contact.exact_coulomb and p.contact.slip == 0)
             active.append(PointForce(p, F, 0.0 if held else p.contact.friction(F, v_x), v_x, v_y, held, resting))
