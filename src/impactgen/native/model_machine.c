@@ -83,6 +83,7 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
     r->t_prev_end = r->t_end;
     r->t_start = t;
     r->t_end = NAN;
+    r->turned = 0;
     if (!into_dent) {  /* a new impact on the undeformed surface (back into its own dent: its law kept) */
         r->delta_max = r->P_max = r->delta_r = 0.0;
         r->R_res = c->R;
@@ -370,17 +371,18 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
 #endif
     }
 #if MODEL_SUSTAINED
-    else if (state == MODEL_MACHINE_RELOADING && next == MODEL_MACHINE_RESTITUTION && m->run_to_time &&
-             pressed_on(m, p, point, t, y)) {
-        /* vibrating on the surface: the point's restitution turned back into reloading before
-         * it separated (or it left its dent with no normal speed and was pulled back in), and
-         * now its reload has peaked. An undamped compliant contact would oscillate so about
-         * its static depth to the end of the run, a vibration of the order of that depth
-         * that any real damping, or a rough surface, takes out at once: the limit of
-         * chattering, a flight of length zero. It is held at this maximum compression, where
-         * its normal speed is 0 (no velocity jumps, no impulse): the elastic energy left in
-         * its dent, the vibration's, is not returned and stays in W_normal as a loss, as at
-         * the chatter switch, so the budget still closes. */
+    if (next == MODEL_MACHINE_RESTITUTION && state != MODEL_MACHINE_RESTITUTION && r->turned && m->run_to_time &&
+        pressed_on(m, p, point, t, y)) {
+        /* vibrating on the surface: the point's restitution turned back into reloading in this
+         * impact before it separated (or it left its dent with no normal speed and was pulled
+         * back in), and now it has reached a maximum compression again (its reload's peak, or,
+         * having passed delta_m, the loading curve's). An undamped compliant contact would
+         * oscillate so about its static depth to the end of the run, a vibration of the order
+         * of that depth that any real damping, or a rough surface, takes out at once: the
+         * limit of chattering, a flight of length zero. It is held at this maximum
+         * compression, where its normal speed is 0 (no velocity jumps, no impulse): the
+         * elastic energy left in its dent, the vibration's, is not returned and stays in
+         * W_normal as a loss, as at the chatter switch, so the budget still closes. */
         next = MODEL_MACHINE_SUSTAINED;
     }
 #endif
@@ -396,6 +398,7 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
          * back in, so the contact event (delta rising through 0) would never fire: it reloads */
         next = MODEL_MACHINE_RELOADING;
     }
+    if (state == MODEL_MACHINE_RESTITUTION && next == MODEL_MACHINE_RELOADING) r->turned = 1;
     if (next == MODEL_MACHINE_FREE) {
         r->t_end = t;
 #if MODEL_RATE_LAW

@@ -166,19 +166,16 @@ def comes_to_rest(model: ReferenceModel, point: ContactPoint, phase: str, impact
                   y: np.ndarray) -> bool:
     """Whether a point at a maximum compression (its normal speed 0) from `phase` is held on the
     surface (sustained contact) rather than unloading: if the hold would press it onto the
-    surface, and its impacts chatter (the flight before this impact was shorter than CHATTER
-    times the contact before it) or it vibrates on the surface (`phase` reloading: its
-    unloading turned back before it separated, a flight of length zero). Either way it would
-    bounce, or vibrate, for the rest of the run by ever smaller amounts that any damping
+    surface, and it vibrates on the surface (its restitution turned back into reloading in this
+    impact before it separated: a flight of length zero) or its impacts chatter (the flight
+    before this impact was shorter than CHATTER times the contact before it). Either way it
+    would bounce, or vibrate, for the rest of the run by ever smaller amounts that any damping
     removes; the elastic energy left in its dent stays in W_normal, a loss."""
-    if phase in ("elastic", "elastoplastic"):
-        own = [i for i in impacts if i.point == point.name]
-        if len(own) < 2 or own[-2].t_end is None:
-            return False
-        before, now = own[-2], own[-1]
-        if not now.t_start - before.t_end < CHATTER * (before.t_end - before.t_start):
-            return False
-    elif phase != "reloading":
+    vibrating = any(switch[1:] == ("restitution", "reloading") for switch in point.impact.switches)
+    own = [i for i in impacts if i.point == point.name]
+    chattering = (phase in ("elastic", "elastoplastic") and len(own) > 1 and own[-2].t_end is not None
+                  and own[-1].t_start - own[-2].t_end < CHATTER * (own[-2].t_end - own[-2].t_start))
+    if phase == "restitution" or not (vibrating or chattering):
         return False
     a = next(a for a in model.contact_forces(y, {point.index: "sustained"}) if a.point is point)
     return a.F > 0

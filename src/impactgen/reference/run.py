@@ -87,19 +87,22 @@ def under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[in
                "through the surface")
 
 
-def coincident(events: dict, fired: list[str], t_before: float, y_before: np.ndarray, t: float,
-               y: np.ndarray) -> list[str]:
-    """The events besides `fired` that crossed in their direction in the segment's last step,
-    from (t_before, y_before) to the event point (t, y): their roots lie within rounding of
-    the first one's, at or past it. solve_ivp reports the roots in a step in time order up to
-    the first terminal one, so one a rounding later went unreported (both ends of a rod lying
-    flat on the surface reach their maximum compression at once), as a root finder that
-    reports every root at the time it returns would not."""
+def coincident(model: ReferenceModel, events: dict, fired: list[str], t_before: float, y_before: np.ndarray,
+               t: float, y: np.ndarray) -> list[str]:
+    """The events of the points without one in `fired` that crossed in their direction in the
+    segment's last step, from (t_before, y_before) to the event point (t, y): their roots lie
+    within rounding of the first one's, at or past it. solve_ivp reports the roots in a step in
+    time order up to the first terminal one, so another point's a rounding later went
+    unreported (both ends of a rod lying flat on the surface reach their maximum compression at
+    once), as a root finder that reports every root at the time it returns would not. A point
+    with an event keeps the one it had (at a reload's peak, back at delta_m within rounding, it
+    turns: it does not pass delta_m)."""
     if not fired:
         return []
+    switching = {id(split_event(model, name)[0]) for name in fired}
     crossed = []
     for name, event in events.items():
-        if name in fired:
+        if id(split_event(model, name)[0]) in switching:
             continue
         now, then = event(t, y), event(t_before, y_before)
         if (event.direction < 0 and then > 0 >= now) or (event.direction > 0 and then < 0 <= now):
@@ -194,7 +197,7 @@ class _Run:
         self.record(seg, in_contact, label)
         before = (float(seg.t[-2]), seg.y[-2]) if len(seg.t) > 1 else (self.t, self.y)
         self.t, self.y = float(seg.t[-1]), seg.y[-1, :self.nstate].copy()
-        fired = seg.fired + coincident(events, seg.fired, *before, self.t, seg.y[-1])
+        fired = seg.fired + coincident(model, events, seg.fired, *before, self.t, seg.y[-1])
         self.spans.append(PhaseSpan(label, self.spans[-1].t1 if self.spans else 0.0, self.t,
                                     fired[0] if fired else "t_end", friction))
         if not fired:
