@@ -176,12 +176,11 @@ def _laid_at_delta_0(slope_deg: float, mu: float, t_end: float):
 
 
 def test_a_free_rod_laid_flat_at_delta_0_comes_to_rest_in_sustained_contact():
-    """The resting start above, run with sustained contact: each end compresses to the
-    undamped peak (5/2)^(2/3) d_s of its static depth d_s (gravity's work m g delta there is
-    the Hertz energy (2/5) P delta), unloads to the surface, reloads, and is held at that
-    reload's peak (no normal speed there). The rod then rests at that depth, each end pressed
-    by m g / 2, and the elastic energy left in the dents is W_normal's loss: W_normal = -m g
-    delta, and the budget closes."""
+    """The resting start above, run with sustained contact: each end compresses (into yield,
+    for this steel: beyond the (5/2)^(2/3) d_s of a Hertzian contact of static depth d_s),
+    unloads to its dent's bottom, reloads back to that maximum (undamped), and is held there
+    (no normal speed). The rod then rests at that depth, each end pressed by m g / 2, and the
+    energy left in the dents is W_normal's loss: W_normal = -m g delta, and the budget closes."""
     scene, result, held_from = _laid_at_delta_0(0.0, 0.3, 0.01)
     assert sorted(i.point for i in result.impacts) == ["base", "tip"] and held_from < 2e-3
     contact = ReferenceModel.from_scene(scene).tip.contact
@@ -189,9 +188,11 @@ def test_a_free_rod_laid_flat_at_delta_0_comes_to_rest_in_sustained_contact():
     static = (3 * (m * g / 2) / (4 * contact.E_star * math.sqrt(contact.R))) ** (2 / 3)
     t, out = result.trajectory.t, result.trajectory.outputs
     held = t > held_from
-    for delta, F in ((out["delta"], out["F"]), (out["delta_J0"], out["F_J0"])):
+    first_maximum = {i.point: i.switches[1][0] for i in result.impacts}  # elastoplastic -> restitution
+    for point, delta, F in (("tip", out["delta"], out["F"]), ("base", out["delta_J0"], out["F_J0"])):
         assert np.ptp(delta[held]) < 1e-6 * static  # where it was held
-        assert delta[-1] == pytest.approx(2.5 ** (2 / 3) * static, rel=1e-3)
+        assert delta[-1] > 2.5 ** (2 / 3) * static
+        assert delta[-1] == pytest.approx(np.interp(first_maximum[point], t, delta), rel=1e-6)
         np.testing.assert_allclose(F[held], m * g / 2, rtol=1e-9)
     speeds = [_column(result, name)[held] for name in ("u1", "u_x0", "u_y0")]
     assert np.abs(speeds).max() < 1e-9
