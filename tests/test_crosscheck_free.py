@@ -29,7 +29,7 @@ SCENES = {  # name: (the scene it changes, its changes)
     # the paper's double pendulum over a surface that descends towards +x at 15 degrees
     "inclined-paper": ("paper", {"surface.angle_deg": 15.0}),
     # the example: the base strikes at 0.101 s, the tip at 0.213 s, the base again at 0.226 s (the
-    # reference engine simulates every rebound: no sustained contact)
+    # runs simulate every rebound: no sustained contact)
     "rod-drop": ("rod-drop", {"solver.t_end": 0.25, "solver.sustained_contact": False}),
     # a resting start: the rod laid nearly flat, its base end on the plate at rest
     "rocking-rod": ("rocking-rod", {"solver.t_end": 0.005, "solver.sustained_contact": False}),
