@@ -104,6 +104,38 @@ def test_a_free_rod_striking_at_one_end_is_hertzian_with_its_effective_mass(thet
     assert impact.duration == pytest.approx(hertz_time_factor() * delta_max / v, rel=explained)
 
 
+def test_a_free_rod_laid_flat_at_delta_0_settles_on_both_ends():
+    """A resting start on a level plate: the rod laid flat, both ends touching at delta = 0,
+    released. Both ends are pulled in, compress to the undamped peak (5/2)^(2/3) d_s of their
+    static depth d_s under m g / 2 (gravity's work m g delta there equals the Hertz energy
+    (2/5) P delta), unload to the surface and reload; at the reload's peak (no normal speed)
+    each is held in sustained contact instead of vibrating to the end of the run. The rod
+    then rests: no speed, its ends at that depth, each pressed by m g / 2, and the vibration's
+    energy, the elastic energy left in the dents, is W_normal's loss: the budget closes."""
+    raw = free_chain(1, chain={"length": 0.5},
+                     initial={"q_deg": [0.0], "u": [0.0], "base": [0.0, 0.0], "base_velocity": [0.0, 0.0]},
+                     solver={"t_end": 0.05})
+    scene = impactgen.scene_from_dict(raw)
+    result = impactgen.simulate(scene, warn=False)
+    assert result.success and {impact.point for impact in result.impacts} == {"base", "tip"}
+    for impact in result.impacts:  # one impact per end, held to the end of the run
+        assert impact.t_end is None and impact.switches[-1][2] == "sustained"
+        assert [s[2] for s in impact.switches] == ["restitution", "reloading", "sustained"]
+    held = result.t > max(impact.switches[-1][0] for impact in result.impacts)
+    assert result.t[-1] - result.t[held][0] > 0.04  # held from the first 2 ms on
+    m, g = scene.chain.mass[0], scene.chain.gravity
+    E_star = 1 / (2 * (1 - STEEL.nu ** 2) / STEEL.E)
+    static = (3 * (m * g / 2) / (4 * E_star * math.sqrt(scene.base_radius))) ** (2 / 3)
+    for delta, F in ((result.delta, result.F), (result.outputs["delta_J0"], result.outputs["F_J0"])):
+        assert np.ptp(delta[held]) < 1e-6 * static  # the height stays where it was held
+        assert delta[-1] == pytest.approx(2.5 ** (2 / 3) * static, rel=1e-3)
+        np.testing.assert_allclose(F[held], m * g / 2, rtol=1e-9)
+    assert np.max(np.abs(result.u[:, held])) < 1e-9 and np.max(np.abs(np.asarray(result.base)[2:, held])) < 1e-9
+    energy = result.summary["energy"]
+    assert energy["residual"] == pytest.approx(0.0, abs=1e-9 * energy["W_gravity"])
+    assert -energy["W_normal"] == pytest.approx(m * g * result.delta[-1], rel=1e-6)  # the dents keep it all
+
+
 def rod_on_slope(angle: float) -> dict:
     """A steel rod laid along a slope (both ends on it, at rest), exact Coulomb friction mu = 0.3."""
     return free_chain(1, chain={"length": 0.5}, surface={"angle_deg": angle, "height": "initial"},
@@ -114,7 +146,9 @@ def rod_on_slope(angle: float) -> dict:
 
 def test_a_rod_on_a_slope_steeper_than_atan_mu_slides_at_g_sin_less_mu_cos():
     angle, mu = 30.0, 0.3
-    result = impactgen.simulate(impactgen.scene_from_dict(rod_on_slope(angle)), warn=False)
+    # sampled: once its ends rest, sliding, the integrator steps over the rest of the run at once
+    result = impactgen.simulate(impactgen.scene_from_dict(rod_on_slope(angle)), warn=False,
+                                t_eval=np.linspace(0.0, 0.2, 201))
     t, vx = result.t, result.base[2]
     later = t > t[-1] / 2
     a = math.radians(angle)
@@ -131,6 +165,13 @@ def test_a_rod_on_a_slope_gentler_than_atan_mu_stays_stuck():
     frictionless = 9.81 * math.sin(math.radians(angle)) * t[-1] ** 2 / 2
     assert abs(x0[-1]) < 2e-3 * frictionless
     assert result.summary["energy"]["residual"] == pytest.approx(0.0, abs=1e-9)
+    # laid at delta = 0, its ends vibrate on the slope only until their reloads peak: from
+    # then on (1.3 ms) both rest, stuck, held in sustained contact, and the rod does not move
+    rest = result.phases[-1]
+    assert (rest.phase, rest.slip_state, rest.ended_by) == ("sustained", "stick", "t_end") and rest.t0 < 2e-3
+    assert [impact.switches[-1][2] for impact in result.impacts] == ["sustained", "sustained"]
+    held = t > rest.t0
+    assert np.ptp(x0[held]) < 1e-12 and np.max(np.abs(result.base[2][held])) < 1e-9
 
 
 @pytest.mark.parametrize("name", ["rod-drop", "rocking-rod", "chain-on-slope"])

@@ -158,6 +158,73 @@ def test_a_free_rod_laid_flat_at_rest_settles_on_both_ends():
     _assert_budget_closes(result)
 
 
+def _laid_at_delta_0(slope_deg: float, mu: float, t_end: float):
+    """The rod of `_rod_on_slope` laid on the slope at delta = 0 and released, its resting ends
+    held in sustained contact once their vibration's reload peaks (solver.sustained_contact);
+    and the time from which both are held."""
+    scene = impactgen.load_scene("paper", {**STEEL_ROD, "initial.q_deg": [0.0], "initial.u": [0.0],
+                                           "surface.height": 0.0, "contact.friction": mu,
+                                           "contact.friction_mode": "coulomb", "solver.t_end": t_end,
+                                           "chain.base": "free", "initial.base": [0.0, 0.0],
+                                           "surface.angle_deg": slope_deg})
+    result = reference.simulate(scene)
+    assert result.status == "ok", result.message
+    for impact in result.impacts:  # each end: one impact, vibrating, then held to the end of the run
+        assert impact.t_end is None and impact.switches[-1][2] == "sustained"
+        assert [s[1:] for s in impact.switches[1:3]] == [("elastoplastic", "restitution"), ("restitution", "reloading")]
+    return scene, result, max(impact.switches[-1][0] for impact in result.impacts)
+
+
+def test_a_free_rod_laid_flat_at_delta_0_comes_to_rest_in_sustained_contact():
+    """The resting start above, run with sustained contact: each end compresses (into yield,
+    for this steel: beyond the (5/2)^(2/3) d_s of a Hertzian contact of static depth d_s),
+    unloads to its dent's bottom, reloads back to that maximum (undamped), and is held there
+    (no normal speed). The rod then rests at that depth, each end pressed by m g / 2, and the
+    energy left in the dents is W_normal's loss: W_normal = -m g delta, and the budget closes."""
+    scene, result, held_from = _laid_at_delta_0(0.0, 0.3, 0.01)
+    assert sorted(i.point for i in result.impacts) == ["base", "tip"] and held_from < 2e-3
+    contact = ReferenceModel.from_scene(scene).tip.contact
+    m, g = scene.chain.mass[0], scene.chain.gravity
+    static = (3 * (m * g / 2) / (4 * contact.E_star * math.sqrt(contact.R))) ** (2 / 3)
+    t, out = result.trajectory.t, result.trajectory.outputs
+    held = t > held_from
+    first_maximum = {i.point: i.switches[1][0] for i in result.impacts}  # elastoplastic -> restitution
+    for point, delta, F in (("tip", out["delta"], out["F"]), ("base", out["delta_J0"], out["F_J0"])):
+        assert np.ptp(delta[held]) < 1e-6 * static  # where it was held
+        assert delta[-1] > 2.5 ** (2 / 3) * static
+        assert delta[-1] == pytest.approx(np.interp(first_maximum[point], t, delta), rel=1e-6)
+        np.testing.assert_allclose(F[held], m * g / 2, rtol=1e-9)
+    speeds = [_column(result, name)[held] for name in ("u1", "u_x0", "u_y0")]
+    assert np.abs(speeds).max() < 1e-9
+    _assert_budget_closes(result)
+    assert -result.summary["energy"]["W_normal"] == pytest.approx(m * g * out["delta"][-1], rel=1e-6)
+
+
+def test_a_rod_laid_at_delta_0_on_a_gentle_slope_rests_stuck():
+    """Laid at delta = 0 on a slope gentler than atan(mu), the rod slips a little while its ends
+    first press in (with F = 0 at the start they cannot stick), and from the hold on both rest
+    stuck: it does not move."""
+    mu = 0.3
+    scene, result, held_from = _laid_at_delta_0(math.degrees(math.atan(mu)) - 5.0, mu, 0.01)
+    assert result.phases[-1].slip_state == "base: stick, tip: stick" and result.phases[-1].ended_by == "t_end"
+    held = result.trajectory.t > held_from
+    x = _column(result, "x_0")[held]
+    assert np.abs(x - x[0]).max() < 1e-12 * scene.chain.length[0]
+    assert np.abs(_column(result, "u_x0")[held]).max() < 1e-9
+    _assert_budget_closes(result)
+
+
+def test_a_rod_laid_at_delta_0_on_a_steep_slope_slides_at_g_sin_minus_mu_cos():
+    mu, slope = 0.3, math.degrees(math.atan(0.3)) + 10.0
+    scene, result, held_from = _laid_at_delta_0(slope, mu, 0.01)
+    held = result.trajectory.t > held_from
+    t, v = result.trajectory.t[held], _column(result, "u_x0")[held]
+    a = math.radians(slope)
+    expected = scene.chain.gravity * (math.sin(a) - mu * math.cos(a))
+    assert len(t) > 2 and np.polyfit(t, v, 1)[0] == pytest.approx(expected, rel=SLIDING)
+    _assert_budget_closes(result)
+
+
 def test_a_rod_on_a_slope_gentler_than_the_friction_angle_stays_stuck():
     mu = 0.3
     scene, result = _rod_on_slope(math.degrees(math.atan(mu)) - 5.0, mu, 0.01)

@@ -83,6 +83,7 @@ typedef struct {
     int impacts;        /* impacts begun */
     int was;            /* its state before its latest switch */
     int act;            /* MODEL_ACT_* bits of its switch at the latest event (0: it had none) */
+    int turned;         /* its restitution turned back into reloading in this impact: it vibrates on the surface */
     double delta_max;   /* maximum compression of the current (or last) impact, m */
     double P_max;       /* force there, N */
     double delta_r;     /* its permanent deformation, m */

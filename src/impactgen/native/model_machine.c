@@ -83,6 +83,7 @@ static void impact_begins(model_machine *m, model_params *p, int point, double t
     r->t_prev_end = r->t_end;
     r->t_start = t;
     r->t_end = NAN;
+    r->turned = 0;
     if (!into_dent) {  /* a new impact on the undeformed surface (back into its own dent: its law kept) */
         r->delta_max = r->P_max = r->delta_r = 0.0;
         r->R_res = c->R;
@@ -295,6 +296,15 @@ static int next_state(int state, const int *has, const model_point_contact *pc)
     }
 }
 
+#if MODEL_SUSTAINED
+/* Whether a point at (t, y), held on the surface (phase sustained, its stick-slip state kept),
+ * would press onto it: the constraint force that holds its v_y is positive. */
+static int pressed_on(const model_machine *m, const model_params *p, int point, double t, const double *y)
+{
+    return outputs_as(p, point, MODEL_PHASE_SUSTAINED, m->point[point].slip, t, y).F > 0.0;
+}
+#endif
+
 /* What a point fixes at its maximum compression, at penetration delta_max under force P_m. */
 static void max_compression(model_point_machine *r, model_point_contact *c, const model_params *p,
                             double delta_max, double P_m)
@@ -355,11 +365,27 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
         /* chattering: hold the point on the surface, if pressed onto it, rather than rebound
          * into ever shorter flights */
         if (r->impacts > 1 && r->t_start - r->t_prev_end < MODEL_CHATTER_RATIO * (r->t_prev_end - r->t_prev_start) &&
-            outputs_as(p, point, MODEL_PHASE_SUSTAINED, r->slip, t, y).F > 0.0) {
+            pressed_on(m, p, point, t, y)) {
             next = MODEL_MACHINE_SUSTAINED;
         }
 #endif
     }
+#if MODEL_SUSTAINED
+    if (next == MODEL_MACHINE_RESTITUTION && state != MODEL_MACHINE_RESTITUTION && r->turned && m->run_to_time &&
+        pressed_on(m, p, point, t, y)) {
+        /* vibrating on the surface: the point's restitution turned back into reloading in this
+         * impact before it separated (or it left its dent with no normal speed and was pulled
+         * back in), and now it has reached a maximum compression again (its reload's peak, or,
+         * having passed delta_m, the loading curve's). An undamped compliant contact would
+         * oscillate so about its static depth to the end of the run, a vibration of the order
+         * of that depth that any real damping, or a rough surface, takes out at once: the
+         * limit of chattering, a flight of length zero. It is held at this maximum
+         * compression, where its normal speed is 0 (no velocity jumps, no impulse): the
+         * elastic energy left in its dent, the vibration's, is not returned and stays in
+         * W_normal as a loss, as at the chatter switch, so the budget still closes. */
+        next = MODEL_MACHINE_SUSTAINED;
+    }
+#endif
 #if MODEL_COULOMB
     if (state != MODEL_MACHINE_FREE && next != MODEL_MACHINE_FREE && r->slip != 0.0 && !slip_fired) {
         const double old = r->slip;
@@ -372,6 +398,7 @@ static int point_switch(model_machine *m, model_params *p, int point, const int 
          * back in, so the contact event (delta rising through 0) would never fire: it reloads */
         next = MODEL_MACHINE_RELOADING;
     }
+    if (state == MODEL_MACHINE_RESTITUTION && next == MODEL_MACHINE_RELOADING) r->turned = 1;
     if (next == MODEL_MACHINE_FREE) {
         r->t_end = t;
 #if MODEL_RATE_LAW

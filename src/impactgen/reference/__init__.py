@@ -15,7 +15,8 @@ changes no result, because the test suite runs this engine for minutes.
   that can reach the surface, and the tip as point n), the forces at the points in contact,
   the right-hand side, the outputs;
 - `events`: each point's root functions in its phase;
-- `machine`: the phase machine over points (transitions, switches, stick and slip);
+- `machine`: the phase machine over points (transitions, switches, stick and slip, the
+  sustained contact of a chattering or vibrating point);
 - `segment`: one phase integrated with scipy.integrate.solve_ivp and its terminal events;
 - `run`: the phase loop (`simulate`); `result`: each point's impacts and the result.
 

@@ -221,27 +221,47 @@ class ChainModel:
         return y, v_y
 
     def holding_forces(self, q: np.ndarray, u: np.ndarray, F: np.ndarray, F_f: np.ndarray,
-                       held: list[int]) -> np.ndarray:
-        """The tangential forces at the points `held` (indices k) that keep their v_x at zero
-        together, the chain carrying the other forces F and F_f (`loads`). With A the rows
-        a_k = (-L_i sin q_i for i < k, 0 beyond), then (1, 0) for a free chain's base,
-        d(v_x)/dt = A du/dt - c = 0 with c_k = sum_{i<k} L_i cos(q_i) u_i^2, and
-        du/dt = free + M^-1 A^T F_hold. Two held points
-        on one nearly horizontal link make A M^-1 A^T nearly singular: holding both exactly
-        would take huge opposite forces for a motion of second order. The pseudo-inverse of the
-        symmetric A M^-1 A^T with the cut-off HOLD_RCOND on its eigenvalues drops that direction
-        (the least-squares solution: the smallest forces that hold the rest); for one held
-        point it is the plain quotient."""
+                       held: list[int], resting: list[tuple[int, float]] = ()) -> tuple[np.ndarray, np.ndarray]:
+        """The forces that hold points still together, the chain carrying the other forces F and
+        F_f (`loads`): the tangential forces at the points `held` (indices k) that keep their v_x
+        at zero (stuck), and the normal forces at the points `resting` (k, f) that keep their
+        v_y at zero (sustained contact), where a resting point that slips carries the friction
+        force f times its normal force with it (f = 0 when it is also stuck).
+
+        With the rows a_k of v_x (-L_i sin q_i for i < k, 0 beyond; then (1, 0) for a free
+        chain's base) and of v_y (L_i cos q_i for i < k; then (0, 1)), d(v)/dt = a du/dt - c with
+        c_k = sum_{i<k} L_i cos(q_i) u_i^2 for v_x and sum_{i<k} L_i sin(q_i) u_i^2 for v_y, and
+        du/dt = free + M^-1 W^T F_hold, W the rows the forces act along (a resting, slipping
+        point's: a_y + f a_x). Two held points on one nearly horizontal link make A M^-1 W^T
+        nearly singular: holding both exactly would take huge opposite forces for a motion of
+        second order. The pseudo-inverse with the cut-off HOLD_RCOND on its singular values
+        drops that direction (the least-squares solution: the smallest forces that hold the
+        rest); for one held point it is the plain quotient. Returns the tangential forces (by
+        `held`) and the normal ones (by `resting`)."""
         n = len(self.L)
         angles, rates = q[:n], u[:n]
-        base = [1.0, 0.0] if self.free else []
-        A = np.array([[*np.where(np.arange(n) < k, -self.L * np.sin(angles), 0.0), *base] for k in held])
-        c = np.array([np.sum((self.L * np.cos(angles) * rates ** 2)[:k]) for k in held])
+        base_x, base_y = ([1.0, 0.0], [0.0, 1.0]) if self.free else ([], [])
+        sin_arm, cos_arm = self.L * np.sin(angles), self.L * np.cos(angles)
+
+        def row(k: int, arm: np.ndarray, base: list[float]) -> list[float]:
+            return [*np.where(np.arange(n) < k, arm, 0.0), *base]
+
+        A = [row(k, -sin_arm, base_x) for k in held] + [row(k, cos_arm, base_y) for k, _ in resting]
+        W = A[:len(held)] + [np.add(row(k, cos_arm, base_y), np.multiply(f, row(k, -sin_arm, base_x)))
+                             for k, f in resting]
+        c = ([np.sum((cos_arm * rates ** 2)[:k]) for k in held]
+             + [np.sum((sin_arm * rates ** 2)[:k]) for k, _ in resting])
+        A, W, c = np.array(A), np.array(W), np.array(c)
         free = self.accelerations(q, u, F, F_f)
-        per_newton = np.linalg.solve(self.mass_matrix(q), A.T)  # du/dt per newton at each held point
-        w, V = np.linalg.eigh(A @ per_newton)
-        kept = w > HOLD_RCOND * w.max()
-        return V[:, kept] @ ((V[:, kept].T @ (c - A @ free)) / w[kept])
+        per_newton = np.linalg.solve(self.mass_matrix(q), W.T)  # du/dt per newton of each holding force
+        system, rhs = A @ per_newton, c - A @ free
+        if not any(f for _, f in resting):  # symmetric (A = W): by its eigenvalues, as it always was
+            w, V = np.linalg.eigh(system)
+            kept = w > HOLD_RCOND * w.max()
+            forces = V[:, kept] @ ((V[:, kept].T @ rhs) / w[kept])
+        else:
+            forces = np.linalg.lstsq(system, rhs, rcond=HOLD_RCOND)[0]
+        return forces[:len(held)], forces[len(held):]
 
     def energies(self, q: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Kinetic energy per link (n, N) and potential energy (N,) for samples q, u (dof, N):

@@ -74,6 +74,8 @@ def contact_events(model: ReferenceModel, point: ContactPoint, start: float = 0.
         if c.rate_law:  # a damped force falls to 0 while the point still penetrates
             events["force_zero"] = terminal(lambda t, y: c.force_sign(*model.delta_and_rate(y, point)), -1)
         return events
+    if phase == "sustained":  # resting: lifts off where the force that holds it falls to 0
+        return {"lift_off": terminal(lambda t, y: next(a.F for a in model.contact_forces(y) if a.point is point), -1)}
     # reloading
     return {"unloading": terminal(rate, -1),
             "passes_delta_m": terminal(lambda t, y: delta(t, y) - c.delta_m, 1)}

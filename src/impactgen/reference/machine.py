@@ -17,6 +17,7 @@ SLIP_NAMES = {1.0: "slip+", -1.0: "slip-", 0.0: "stick"}
 TANGENTIAL = 1e-12  # a normal speed within this fraction of the point's speed is a tangential start
 MOVING = 1e-12  # a contact begins slipping if its v_x exceeds this fraction of its speed, else as at a stop
 STOPPED = 1e-9  # after a contact event, a slip whose v_x (along it) is within this fraction of the speed has stopped
+CHATTER = 2.0  # a point's impacts chatter when the flight between them is shorter than this many contact times
 
 # the phase each event leads to; "reentry" and "passes_delta_m" depend on the point (`after`)
 TRANSITIONS = {("free", "contact"): "elastic", ("elastic", "yield"): "elastoplastic",
@@ -24,7 +25,7 @@ TRANSITIONS = {("free", "contact"): "elastic", ("elastic", "yield"): "elastoplas
                ("elastoplastic", "max_compression"): "restitution",
                ("restitution", "separation"): "free", ("restitution", "force_zero"): "free",
                ("restitution", "reloading"): "reloading",
-               ("reloading", "unloading"): "restitution"}
+               ("reloading", "unloading"): "restitution", ("sustained", "lift_off"): "free"}
 
 
 def normal_start(model: ReferenceModel, y: np.ndarray, point: ContactPoint, touch: float) -> tuple[bool, float]:
@@ -149,12 +150,35 @@ def switch(model: ReferenceModel, point: ContactPoint, events: list[str], t: flo
     impact = point.impact
     if new == "restitution" and phase in ("elastic", "elastoplastic"):
         _at_maximum_compression(model, point, phase, y, sample, integrals)
+    if new == "restitution" and model.sustained and comes_to_rest(model, point, phase, impacts, y):
+        new = "sustained"
     impact.switches.append((t, phase, new))
     point.phase = new
     if new == "free":
+        if phase == "sustained":  # the surface stays where the point lifted off it: its dent kept
+            point.contact.y_s -= model.delta_and_rate(y, point)[0]
         end_impact(model, point, t, y, sample, integrals)
         return True
     return False
+
+
+def comes_to_rest(model: ReferenceModel, point: ContactPoint, phase: str, impacts: list[PointImpact],
+                  y: np.ndarray) -> bool:
+    """Whether a point at a maximum compression (its normal speed 0) from `phase` is held on the
+    surface (sustained contact) rather than unloading: if the hold would press it onto the
+    surface, and it vibrates on the surface (its restitution turned back into reloading in this
+    impact before it separated: a flight of length zero) or its impacts chatter (the flight
+    before this impact was shorter than CHATTER times the contact before it). Either way it
+    would bounce, or vibrate, for the rest of the run by ever smaller amounts that any damping
+    removes; the elastic energy left in its dent stays in W_normal, a loss."""
+    vibrating = any(switch[1:] == ("restitution", "reloading") for switch in point.impact.switches)
+    own = [i for i in impacts if i.point == point.name]
+    chattering = (phase in ("elastic", "elastoplastic") and len(own) > 1 and own[-2].t_end is not None
+                  and own[-1].t_start - own[-2].t_end < CHATTER * (own[-2].t_end - own[-2].t_start))
+    if phase == "restitution" or not (vibrating or chattering):
+        return False
+    a = next(a for a in model.contact_forces(y, {point.index: "sustained"}) if a.point is point)
+    return a.F > 0
 
 
 def begin_impact(model: ReferenceModel, point: ContactPoint, phase: str, t: float, y: np.ndarray, sample: int,

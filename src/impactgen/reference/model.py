@@ -39,6 +39,7 @@ class PointForce:
     v_x: float
     v_y: float
     held: bool  # its F_f is the force that holds it still (exact Coulomb, stuck)
+    resting: bool = False  # its F is the force that holds it on the surface (sustained contact)
 
 
 def surface_height(scene: Scene, body: Body | None = None) -> float:
@@ -82,6 +83,7 @@ class ReferenceModel:
     joints: list[ContactPoint] = field(default_factory=list)
     base: ContactPoint | None = None  # a free chain's point 0
     body: Body = field(default_factory=Body)
+    sustained: bool = False  # a run to a time that holds resting points (solver.sustained_contact)
 
     def __post_init__(self) -> None:
         tip = ContactPoint(self.n, point_name(self.n, self.n), self.contact)
@@ -115,7 +117,8 @@ class ReferenceModel:
         base = (ContactPoint(0, point_name(0, scene.n), Contact.from_scene(scene, y_s, body.base_radius))
                 if body.free else None)
         return cls(ChainModel.from_scene(scene, body.free, body.slope), Contact.from_scene(scene, y_s), scene.n,
-                   scene.contact.friction > 0, joints, base, body)
+                   scene.contact.friction > 0, joints, base, body,
+                   scene.solver.t_end is not None and scene.solver.sustained_contact)
 
     def initial_state(self, scene: Scene) -> np.ndarray:
         """The state at t = 0: the positions and speeds (the base's after the angles for a free chain),
@@ -170,7 +173,9 @@ class ReferenceModel:
                        still: ContactPoint | None = None) -> list[PointForce]:
         """The forces at every point in contact. `phases`: phases by point index that replace
         the points' own. `still`: a point held still as if stuck, to see whether it sticks at a
-        stop. Stuck points are held together (exact Coulomb): their forces depend on each other."""
+        stop. Stuck points (exact Coulomb) and resting ones (sustained contact: its v_y held,
+        F the force that holds it, friction -mu F s with it when it slips) are held together:
+        their forces depend on each other."""
         phases = phases or {}
         active = []
         for p in self.points:
@@ -178,19 +183,31 @@ class ReferenceModel:
             if phase == "free":
                 continue
             _, y_k, v_x, v_y = self.kinematics(y, p)
-            F = p.contact.normal_force(phase, p.contact.y_s - y_k, -v_y)
+            resting = phase == "sustained" and self.sustained  # (a scene without it has no such phase)
+            F = 0.0 if resting else p.contact.normal_force(phase, p.contact.y_s - y_k, -v_y)
             held = p is still or (p.contact.exact_coulomb and p.contact.slip == 0)
-            active.append(PointForce(p, F, 0.0 if held else p.contact.friction(F, v_x), v_x, v_y, held))
-        held = [a for a in active if a.held]
-        if held:
-            n = self.dof
-            indices = [a.point.index for a in active]
-            hold = self.chain.holding_forces(y[:n], y[n:2 * n], self.chain.loads(indices, [a.F for a in active]),
-                                             self.chain.loads(indices, [a.F_f for a in active]),
-                                             [a.point.index for a in held])
-            for a, h in zip(held, hold):
-                a.F_f = float(h)
+            active.append(PointForce(p, F, 0.0 if held else p.contact.friction(F, v_x), v_x, v_y, held, resting))
+        if any(a.held or a.resting for a in active):
+            self._hold(y, active)
         return active
+
+    def _hold(self, y: np.ndarray, active: list[PointForce]) -> None:
+        """Set the forces of the held points in `active` (ChainModel.holding_forces)."""
+        n = self.dof
+        indices = [a.point.index for a in active]
+        stuck = [a for a in active if a.held]
+        resting = [a for a in active if a.resting]
+        per_newton = [0.0 if a.held else a.point.contact.friction(1.0, a.v_x) for a in resting]
+        tangential, normal = self.chain.holding_forces(
+            y[:n], y[n:2 * n], self.chain.loads(indices, [a.F for a in active]),
+            self.chain.loads(indices, [a.F_f for a in active]), [a.point.index for a in stuck],
+            [(a.point.index, f) for a, f in zip(resting, per_newton)])
+        for a, h in zip(stuck, tangential):
+            a.F_f = float(h)
+        for a, h, f in zip(resting, normal, per_newton):
+            a.F = float(h)
+            if not a.held:
+                a.F_f = f * a.F
 
     def friction_force(self, y: np.ndarray, point: ContactPoint) -> float:
         """The friction force at a point: 0 when it is free."""
@@ -205,7 +222,7 @@ class ReferenceModel:
         q, u = y[:, :dof].T, y[:, dof:2 * dof].T
         x_B, y_B, v_Bx, v_By = self.chain.point(q, u, n)
         delta = tip.contact.y_s - y_B
-        F = np.array([tip.contact.normal_force(tip.phase, d, -v) for d, v in zip(delta, v_By)])
+        F = self._normal_forces(y, tip, delta, v_By)
         out = {"x_B": x_B, "y_B": y_B, "v_Bx": v_Bx, "v_By": v_By, "delta": delta, "delta_rate": -v_By, "F": F}
         if self.friction_state:
             out["F_f"] = np.array([self.friction_force(row, tip) for row in y])
@@ -216,5 +233,11 @@ class ReferenceModel:
             _, y_k, _, v_k = self.chain.point(q, u, p.index)
             delta_k = p.contact.y_s - y_k
             out[f"delta_J{p.index}"] = delta_k
-            out[f"F_J{p.index}"] = np.array([p.contact.normal_force(p.phase, d, -v) for d, v in zip(delta_k, v_k)])
+            out[f"F_J{p.index}"] = self._normal_forces(y, p, delta_k, v_k)
         return out
+
+    def _normal_forces(self, y: np.ndarray, point: ContactPoint, delta: np.ndarray, v_y: np.ndarray) -> np.ndarray:
+        """A point's normal force at samples y: its law's, or (resting) the force that holds it."""
+        if point.phase == "sustained":
+            return np.array([next(a.F for a in self.contact_forces(row) if a.point is point) for row in y])
+        return np.array([point.contact.normal_force(point.phase, d, -v) for d, v in zip(delta, v_y)])

@@ -36,9 +36,6 @@ def simulate(scene: Scene, method: str = "Radau", rtol: float | None = None,
     contact, no point touches the surface any more."""
     if method not in METHODS and integrate is solve_ivp_segment:
         raise SceneError("method", f"{method!r} is not one of {', '.join(METHODS)}")
-    if scene.solver.t_end is not None and scene.solver.sustained_contact:
-        raise SceneError("solver.sustained_contact", "the reference engine simulates every impact "
-                         "and has no sustained-contact phase: set it to false to compare the engines")
     run = _Run(scene, model or ReferenceModel.from_scene(scene), method, rtol, atol, integrate, engine, t_eval,
                dense_output)
     return run.no_impact() or run.to_the_end()
@@ -88,6 +85,29 @@ def under_floor(model: ReferenceModel, t: np.ndarray, y: np.ndarray) -> tuple[in
     return k, (f"{name} is {-heights[point, k]:.3g} m below the surface at t = {t[k]:.6g} s (deeper than "
                f"{100 * FLOOR_DEPTH:g} % of the shortest link, beyond any contact's depth): the chain went "
                "through the surface")
+
+
+def coincident(model: ReferenceModel, events: dict, fired: list[str], t_before: float, y_before: np.ndarray,
+               t: float, y: np.ndarray) -> list[str]:
+    """The events of the points without one in `fired` that crossed in their direction in the
+    segment's last step, from (t_before, y_before) to the event point (t, y): their roots lie
+    within rounding of the first one's, at or past it. solve_ivp reports the roots in a step in
+    time order up to the first terminal one, so another point's a rounding later went
+    unreported (both ends of a rod lying flat on the surface reach their maximum compression at
+    once), as a root finder that reports every root at the time it returns would not. A point
+    with an event keeps the one it had (at a reload's peak, back at delta_m within rounding, it
+    turns: it does not pass delta_m)."""
+    if not fired:
+        return []
+    switching = {id(split_event(model, name)[0]) for name in fired}
+    crossed = []
+    for name, event in events.items():
+        if id(split_event(model, name)[0]) in switching:
+            continue
+        now, then = event(t, y), event(t_before, y_before)
+        if (event.direction < 0 and then > 0 >= now) or (event.direction > 0 and then < 0 <= now):
+            crossed.append(name)
+    return crossed
 
 
 class _Run:
@@ -172,10 +192,12 @@ class _Run:
         label, friction = segment_label(model)
         if len(self.spans) >= MAX_SEGMENTS:
             raise SolverError(f"more than {MAX_SEGMENTS} phase switches; shorten solver.t_end", label, self.t)
-        seg = self.integrate_segment(in_contact, label)
+        events = segment_events(model, self.y)
+        seg = self.integrate_segment(in_contact, label, events)
         self.record(seg, in_contact, label)
+        before = (float(seg.t[-2]), seg.y[-2]) if len(seg.t) > 1 else (self.t, self.y)
         self.t, self.y = float(seg.t[-1]), seg.y[-1, :self.nstate].copy()
-        fired = seg.fired
+        fired = seg.fired + coincident(model, events, seg.fired, *before, self.t, seg.y[-1])
         self.spans.append(PhaseSpan(label, self.spans[-1].t1 if self.spans else 0.0, self.t,
                                     fired[0] if fired else "t_end", friction))
         if not fired:
@@ -183,7 +205,7 @@ class _Run:
             return False
         return not self.apply(fired)
 
-    def integrate_segment(self, in_contact: list[ContactPoint], label: str) -> Segment:
+    def integrate_segment(self, in_contact: list[ContactPoint], label: str, events: dict) -> Segment:
         """One segment from (t, y), each point in contact integrating its own works and
         impulses as extra states when several are; a failure keeps the samples it made."""
         more = self.integrals.extra_states(in_contact)
@@ -192,8 +214,8 @@ class _Run:
         extra = {"dense": True} if self.dense else {}
         tip = self.model.tip  # the integrators pass point n's phase on to rhs (ReferenceModel.rhs)
         try:
-            seg = self.integrate(self.model, tip.phase, self.t, y0, self.t_final, segment_events(self.model, self.y),
-                                 self.method, self.rtol, atol, **extra)
+            seg = self.integrate(self.model, tip.phase, self.t, y0, self.t_final, events, self.method, self.rtol, atol,
+                                 **extra)
         except SolverError as error:
             partial = getattr(error, "partial", None)
             if partial is not None and len(partial[0]):
