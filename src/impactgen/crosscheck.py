@@ -125,8 +125,8 @@ def with_tolerance(scene: Scene, rtol: float) -> Scene:
 
 
 def standard_scenes(links: Iterable[int], rtol: float) -> list[Scene]:
-    """The shipped example scenes that stop at their first separation (the reference engine
-    has no sustained-contact phase to compare a run to a time with), and the paper's steel
+    """The shipped example scenes that stop at their first separation (runs to a time are
+    compared in tests/test_crosscheck_free.py and by POINT_SCENES), and the paper's steel
     chain with each number of links."""
     from .examples import example_names
     shipped = [load_scene(name) for name in example_names()]
@@ -135,7 +135,7 @@ def standard_scenes(links: Iterable[int], rtol: float) -> list[Scene]:
 
 
 # Several contact points: scenes where joints strike the surface (issue 38), every impact
-# simulated (the reference engine has no sustained contact).
+# simulated (no sustained contact: each rebound in both engines).
 POINT_SCENES = {
     "two-points-at-once": {"initial.q_deg": [-30, 0], "initial.u": [-1, 0], "surface.height": "initial"},
     "joint-2-and-tip": {"chain.links": 3, "chain.length": [1, 1, 0.2], "initial.q_deg": [-30, -80, -20],

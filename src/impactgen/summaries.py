@@ -11,7 +11,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from .codegen.spec import BASE_POINT, point_name, point_number
-from .impacts import COEFFICIENT_UNITS, COEFFICIENTS, IMPACT_UNITS, Impact, PhaseSpan, first_of, switch_list
+from .impacts import COEFFICIENT_UNITS, COEFFICIENTS, IMPACT_UNITS, Impact, first_of, switch_list
 from .records import Tallied
 
 if TYPE_CHECKING:  # (annotations only: results.py imports this module)
@@ -89,7 +89,7 @@ def _summary(result: SimulationResult, i0: int, i1: int, impacts: list[Impact],
     deepest = min(impacts, key=lambda impact: _dent_order(impact, n), default=None)
     contact = sum((i.t_end if i.t_end is not None else t_last) - i.t_start
                   for i in impacts if i.t_end is not None or count_open)
-    sustained = _sustained_start(result.phases)
+    sustained = _sustained_start(result.impacts)
     run_first = first_of(result.impacts, n)
     counts = [0] * (n + 1)
     for impact in result.impacts:
@@ -152,5 +152,6 @@ def _dent_order(impact: Impact, n: int) -> tuple[float, float, int]:
     return -impact.delta_r, impact.t_start, point_number(impact.point, n)
 
 
-def _sustained_start(phases: list[PhaseSpan]) -> float | None:
-    return next((p.t0 for p in phases if p.phase == "sustained"), None)
+def _sustained_start(impacts: list[Impact]) -> float | None:
+    """When the first point went into sustained contact (any point's switch into it)."""
+    return min((t for impact in impacts for t, _, to in impact.switches if to == "sustained"), default=None)

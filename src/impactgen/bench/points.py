@@ -38,7 +38,7 @@ def points_benchmark(quick: bool) -> dict:
     scene = dropped_chain()
     impactgen.simulate(scene.replace({"solver.t_end": 1e-3}))  # build, outside the timing
     wall, result = _best(lambda: impactgen.simulate(scene, record_steps=False), ROUNDS[mode])
-    # the reference engine simulates every impact (no sustained contact): so does C over the span
+    # both engines simulate every impact over the span (no sustained contact)
     span = scene.replace({"solver.t_end": REFERENCE_SPAN[mode], "solver.sustained_contact": False})
     c_span, c_short = _best(lambda: impactgen.simulate(span), ROUNDS[mode])
     ref_span, ref_short = _best(lambda: impactgen.simulate(span, engine="reference"), 1)
