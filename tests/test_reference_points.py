@@ -2,8 +2,8 @@
 reference engine with the joints and the tip as contact points, each with its own laws, phase
 and impacts, several of them in contact at once.
 
-The reference engine has no sustained-contact phase, so every run to a time here sets
-solver.sustained_contact = false and simulates each rebound.
+Every run to a time here sets solver.sustained_contact = false and simulates each rebound
+(the reference engine's sustained contact is tested in tests/test_reference_free.py).
 """
 from __future__ import annotations
 
