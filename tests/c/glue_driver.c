@@ -162,7 +162,7 @@ int main(void)
         EXPECT(ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, 7, &n, segs, 1, &n_seg,
                       NULL) == IG_ERR_USAGE, "ig_run into full buffers refused (not a loop that never ends)");
         ig_outputs(&q, 1, &t, y, out);
-        ig_tally_begin(&tally, t, y, out, m.point[MODEL_TIP_POINT].impacts > 0);
+        ig_tally_start(&tally, &m, t, y, out);  /* the points the machine started in contact: impacts */
         do {
             n = 0;  /* the buffers emptied before each call */
             flag = ig_run(s, &m, &q, &t, y, 1.0, 1.0, 1e-12, 100, every, t_buf, y_buf, out, NULL, every ? 7 : 1, &n,
