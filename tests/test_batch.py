@@ -159,6 +159,20 @@ def test_run_batch_issues_one_validity_warning():
     assert len([w for w in caught if issubclass(w.category, ValidityWarning)]) == 1
 
 
+def _batched_as_per_case(base, cases: list[tuple[int, dict]]):
+    """The cases through the batch: their rows (asserted the per-case path's, bit for bit), and
+    what the batch's plan ran (`again`: the cases it left to the per-case path)."""
+    batched = run_chunk(base.to_dict(), cases, CaseOptions())
+    one_by_one = ChunkColumns(cases)
+    for index, case in cases:
+        run_case(one_by_one, base, index, case)
+    _same(batched.columns, one_by_one.rows().columns)
+    plan = batch.plan_for(base, tuple(cases[0][1]))
+    assert plan is not None
+    values, usable = batch.case_values(plan.keys, [case for _, case in cases])
+    return batched, batch.run_plan(plan, values, usable)
+
+
 def _free_cases(count: int, seed: int) -> list[tuple[int, dict]]:
     """A dropped rod's start drawn wide: its angle, its base point's height (a few below the
     plate: the scene refuses them) and its vertical speed."""
@@ -184,15 +198,7 @@ def test_a_free_chain_s_batch_gives_the_per_case_rows_bit_for_bit(name, override
     screened for the warnings at its own point."""
     base = impactgen.load_scene(name, overrides=overrides)
     cases = _free_cases(40, 5)
-    batched = run_chunk(base.to_dict(), cases, CaseOptions())
-    one_by_one = ChunkColumns(cases)
-    for index, case in cases:
-        run_case(one_by_one, base, index, case)
-    _same(batched.columns, one_by_one.rows().columns)
-    plan = batch.plan_for(base, tuple(cases[0][1]))
-    assert plan is not None
-    values, usable = batch.case_values(plan.keys, [case for _, case in cases])
-    ran = batch.run_plan(plan, values, usable)
+    batched, ran = _batched_as_per_case(base, cases)
     status = np.array(batched.columns["status"])
     warned = np.array(batched.columns["warnings"]) != ""
     assert ran.again[warned].all()  # (a case with a warning is worded by the per-case path)
@@ -213,12 +219,6 @@ def test_a_level_case_of_an_inclined_scene_runs_on_the_level_model():
     base = impactgen.load_scene("chain-on-slope", overrides={"solver.t_end": "separation"})
     cases = [(i, {"surface.angle_deg": a, "initial.q_deg[1]": q})
              for i, (a, q) in enumerate([(0.0, -20.0), (10.0, -20.0), (25.0, -25.0), (-10.0, -20.0)])]
-    batched = run_chunk(base.to_dict(), cases, CaseOptions())
-    one_by_one = ChunkColumns(cases)
-    for index, case in cases:
-        run_case(one_by_one, base, index, case)
-    _same(batched.columns, one_by_one.rows().columns)
-    plan = batch.plan_for(base, tuple(cases[0][1]))
-    values, usable = batch.case_values(plan.keys, [case for _, case in cases])
-    assert batch.run_plan(plan, values, usable).again.tolist() == [True, False, False, False]
+    batched, ran = _batched_as_per_case(base, cases)
+    assert ran.again.tolist() == [True, False, False, False]
     assert list(batched.columns["status"]) == ["ok"] * 4

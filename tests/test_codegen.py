@@ -224,6 +224,16 @@ def test_generated_jackson_green_law_equals_the_papers_powers(paper_scene):
         assert c_force == pytest.approx(exact, rel=2e-14, abs=0.0), w
 
 
+def _contact_law() -> dict[str, float]:
+    """A contact point's law record (the paper's steel, in restitution after delta_m = 20 um)
+    for the Jacobian tests."""
+    law = {"E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0, "C_j": 1.6, "B": 0.175,
+           "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084, "mu": 0.2, "eps": 1e-3}
+    law.update(inv_delta_c=1 / law["delta_c"],
+               theta_c=np.pi * np.sqrt(law["delta_c"] / law["R"]) * 1.9 ** (-law["B"] / 2))
+    return law
+
+
 @pytest.mark.parametrize("spec", [ModelSpec(3, "three-phase", "regularized", True, joints=(1, 2)),
                                   ModelSpec(3, "hertz", "none", True, joints=(2,)),
                                   ModelSpec(3, "three-phase", "regularized", True, True, joints=(1, 2))],
@@ -238,10 +248,7 @@ def test_analytic_jacobian_covers_every_contact_point(spec):
     rng = np.random.default_rng(7)
     n, N = spec.links, model.nstate
     p = ffi.new("model_params *")
-    law = {"E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0, "C_j": 1.6, "B": 0.175,
-           "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084, "mu": 0.2, "eps": 1e-3}
-    law.update(inv_delta_c=1 / law["delta_c"],
-               theta_c=np.pi * np.sqrt(law["delta_c"] / law["R"]) * 1.9 ** (-law["B"] / 2))
+    law = _contact_law()
     values = {**{f"L{i + 1}": rng.uniform(0.5, 1.5) for i in range(n)},
               **{f"m{i + 1}": rng.uniform(0.5, 2.0) for i in range(n)}, "g": 9.81, **law}
     for name in model.param_names:
@@ -284,10 +291,7 @@ def test_analytic_jacobian_of_a_free_chain_matches_central_differences(spec):
     n, dof, N = spec.links, spec.dof, model.nstate
     assert lib.MODEL_NDOF == dof == n + 2 and lib.MODEL_NMOTION == 2 * dof
     p = ffi.new("model_params *")
-    law = {"E_star": 1.15e11, "R": 0.005, "delta_c": 3.0e-6, "P_c": 9.0, "C_j": 1.6, "B": 0.175,
-           "delta_m": 2.0e-5, "delta_r": 5.0e-6, "R_res": 0.0084, "mu": 0.2, "eps": 1e-3}
-    law.update(inv_delta_c=1 / law["delta_c"],
-               theta_c=np.pi * np.sqrt(law["delta_c"] / law["R"]) * 1.9 ** (-law["B"] / 2))
+    law = _contact_law()
     values = {**{f"L{i + 1}": rng.uniform(0.5, 1.5) for i in range(n)},
               **{f"m{i + 1}": rng.uniform(0.5, 2.0) for i in range(n)}, "g": 9.81, "angle_deg": 20.0, **law}
     assert ("angle_deg" in model.param_names) == spec.inclined
