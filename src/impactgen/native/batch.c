@@ -66,10 +66,7 @@ static int other_model(model_params *p, const double *y, const int *slot)
 static void constants_of(const model_params *p, int number, double *R, double *delta_c)
 {
 #if MODEL_PLASTIC && !MODEL_THORNTON
-    int k = MODEL_TIP_POINT;
-    for (int j = 0; j < MODEL_NCONTACT; ++j) {
-        if (model_point_number(j) == number) k = j;
-    }
+    const int k = ig_point_index(number);
     *R = p->point[k].R;
     *delta_c = p->point[k].delta_c;
 #else

@@ -8,8 +8,8 @@
 
 #include "tally.h"
 
-/* The machine index k of the contact point numbered `number` (ig_segment.point). */
-static int point_index(int number)
+/* (tally.h) */
+int ig_point_index(int number)
 {
     for (int k = 0; k < MODEL_NCONTACT; ++k) {
         if (model_point_number(k) == number) return k;
@@ -138,7 +138,7 @@ void ig_tally_segment(ig_tally *a, const ig_segment *seg, const double *t_buf, c
                       const double *out_buf)
 {
     const long i = seg->sample;
-    const int k = point_index(seg->point);
+    const int k = ig_point_index(seg->point);
     const double *y = y_buf + (size_t)i * MODEL_NSTATE, *out = out_buf + (size_t)i * MODEL_NOUT;
     ig_impact_now *now = &a->now[k];
     if (seg->next_state == MODEL_MACHINE_SUSTAINED && seg->state != MODEL_MACHINE_SUSTAINED &&

@@ -117,6 +117,10 @@ void ig_summarize(const ig_tally *tally, ig_summary *run, ig_summary *first_impa
 
 /* cdef-end */
 
+/* The machine index k (m->point[k]) of the contact point numbered `number` (ig_segment.point:
+ * 0 a free chain's base, k joint k, MODEL_NQ the tip); the tip's for a number it lacks. */
+int ig_point_index(int number);
+
 /* The values a summary reads at one sample (t, y with its outputs out): the chain's (its
  * `own` and v_n are left for the first impact's samples). */
 void ig_read_point(ig_point *point, double t, const double *y, const double *out);
